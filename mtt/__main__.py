@@ -1,0 +1,3 @@
+from mtt.cli import main
+
+raise SystemExit(main())

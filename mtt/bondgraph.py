@@ -1,0 +1,401 @@
+"""Stage 2: `ParsedModel` -> `BondGraph`, a validated networkx multigraph.
+
+One node per component and one edge per bond (tail -> head is the direction of
+positive power, keyed by the bond's number in file order). Validation reports every
+problem it can find in one pass, each with its kind and place.
+"""
+
+from __future__ import annotations
+
+from collections import defaultdict
+from dataclasses import dataclass
+from types import MappingProxyType
+
+import networkx as nx
+import sympy
+
+from mtt.components import LIBRARY, ComponentType, PortRule, Role
+from mtt.diagnostics import Diagnostic, ModelError, Position, Severity, Source, error, warning
+from mtt.parse import RESERVED, ComponentUse, Expression, NameUse, ParsedModel
+
+
+@dataclass(frozen=True)
+class Parameter:
+    name: str
+    value: Expression | None
+    description: str | None
+    declared_unknown: bool
+    position: Position
+
+
+@dataclass(frozen=True)
+class Component:
+    name: str
+    type: ComponentType
+    argument: Expression | None  # explicit, or the parameter of the same name
+    position: Position  # first mention
+    description: str | None
+
+    @property
+    def label(self) -> str:
+        return f"{self.type.name}:{self.name}"
+
+
+@dataclass(frozen=True)
+class Bond:
+    number: int
+    tail: str
+    head: str
+    position: Position
+
+
+@dataclass(frozen=True)
+class Port:
+    """A bond as one of its components sees it."""
+
+    bond: int
+    inward: bool
+
+
+@dataclass(frozen=True)
+class BondGraph:
+    source: Source
+    name: str
+    description: str | None
+    graph: nx.MultiDiGraph
+    parameters: MappingProxyType  # name -> Parameter, in file order
+    input: str
+    output: str
+    unknown: str | None
+    warnings: tuple[Diagnostic, ...]
+
+    def component(self, name: str) -> Component:
+        return self.graph.nodes[name]["component"]
+
+    @property
+    def components(self) -> tuple[Component, ...]:
+        return tuple(data["component"] for _, data in self.graph.nodes(data=True))
+
+    @property
+    def bonds(self) -> tuple[Bond, ...]:
+        edges = self.graph.edges(keys=True, data=True)
+        return tuple(sorted((data["bond"] for *_, data in edges), key=lambda b: b.number))
+
+    def ports(self, name: str) -> tuple[Port, ...]:
+        """A component's bonds in port order: by bond number, a two-port's inward bond first."""
+        inward = [Port(k, True) for _, _, k in self.graph.in_edges(name, keys=True)]
+        outward = [Port(k, False) for _, _, k in self.graph.out_edges(name, keys=True)]
+        if self.component(name).type.ports is PortRule.TWO:
+            return tuple(inward + outward)
+        return tuple(sorted(inward + outward, key=lambda p: p.bond))
+
+    def bond(self, number: int) -> Bond:
+        return next(b for b in self.bonds if b.number == number)
+
+
+def _implied_argument(use: ComponentUse) -> Expression:
+    """`R:ra` means `R:ra(ra)`."""
+    return Expression(sympy.Symbol(use.name), (NameUse(use.name, use.position),), use.position)
+
+
+class _Checker:
+    """Collects the problems of one model; each method checks one rule of the language."""
+
+    def __init__(self, parsed: ParsedModel, unknown: str | None):
+        self.parsed = parsed
+        self.option_unknown = unknown
+        self.problems: list[Diagnostic] = []
+        self.components: dict[str, Component] = {}
+        self.parameters: dict[str, Parameter] = {}
+
+    def report(self, kind: str, message: str, position: Position | None = None) -> None:
+        self.problems.append(error(kind, message, position))
+
+    def check_parameters(self) -> None:
+        for decl in self.parsed.parameters:
+            if decl.name in RESERVED:
+                self.report(
+                    "bad_argument",
+                    f"{decl.name!r} is reserved and cannot name a parameter",
+                    decl.position,
+                )
+            elif decl.name in self.parameters:
+                first = self.parameters[decl.name].position
+                self.report(
+                    "duplicate_name",
+                    f"parameter {decl.name!r} is already declared on line {first.line}",
+                    decl.position,
+                )
+            else:
+                self.parameters[decl.name] = Parameter(
+                    decl.name, decl.value, decl.description, decl.unknown, decl.position
+                )
+
+    def check_components(self) -> None:
+        declared: dict[str, Position] = {}
+        for decl in self.parsed.declarations:
+            name = decl.use.name
+            if name in declared:
+                self.report(
+                    "duplicate_name",
+                    f"component {name!r} is already declared on line {declared[name].line}",
+                    decl.use.position,
+                )
+            declared.setdefault(name, decl.use.position)
+        descriptions = {d.use.name: d.description for d in self.parsed.declarations}
+        argument_at: dict[str, Position] = {}
+        for use in self.parsed.mentions:
+            kind = LIBRARY.get(use.type)
+            if kind is None:
+                known = " ".join(LIBRARY)
+                self.report(
+                    "unknown_component_type",
+                    f"unknown component type {use.type!r} (known: {known})",
+                    use.position,
+                )
+                continue
+            seen = self.components.get(use.name)
+            if seen is not None and seen.type is not kind:
+                self.report(
+                    "duplicate_name",
+                    f"{use.label} names the component {seen.label} "
+                    f"of line {seen.position.line} with another type",
+                    use.position,
+                )
+                continue
+            if use.argument is not None:
+                self._check_argument(use, kind, argument_at)
+            if seen is None:
+                self.components[use.name] = Component(
+                    use.name, kind, use.argument, use.position, descriptions.get(use.name)
+                )
+            elif use.argument is not None and seen.argument is None:
+                self.components[use.name] = Component(
+                    seen.name, kind, use.argument, seen.position, seen.description
+                )
+        for name, component in self.components.items():
+            if component.type.takes_argument and component.argument is None:
+                use = ComponentUse(component.type.name, name, None, component.position)
+                self.components[name] = Component(
+                    name,
+                    component.type,
+                    _implied_argument(use),
+                    component.position,
+                    component.description,
+                )
+
+    def _check_argument(self, use: ComponentUse, kind: ComponentType, seen: dict) -> None:
+        if not kind.takes_argument:
+            self.report(
+                "bad_argument", f"a {kind.summary} takes no argument", use.argument.position
+            )
+        elif use.name in seen:
+            self.report(
+                "duplicate_argument",
+                f"the argument of {use.label} is already given on line {seen[use.name].line}",
+                use.argument.position,
+            )
+        else:
+            seen[use.name] = use.argument.position
+
+    def check_names(self) -> None:
+        expressions = [p.value for p in self.parameters.values() if p.value is not None]
+        expressions += [c.argument for c in self.components.values() if c.argument is not None]
+        for expression in expressions:
+            for use in expression.names:
+                if use.name in self.parameters:
+                    continue
+                hint = (
+                    " (s, the Laplace variable, cannot appear in a parameter)"
+                    if use.name == "s"
+                    else ""
+                )
+                self.report(
+                    "undeclared_parameter",
+                    f"parameter {use.name!r} is not declared{hint}",
+                    use.position,
+                )
+
+    def check_cycles(self) -> None:
+        depends = nx.DiGraph()
+        for p in self.parameters.values():
+            depends.add_node(p.name)
+            for use in p.value.names if p.value else ():
+                if use.name in self.parameters:
+                    depends.add_edge(p.name, use.name)
+        for group in nx.strongly_connected_components(depends):
+            first = min(group, key=lambda n: self.parameters[n].position)
+            if len(group) > 1 or depends.has_edge(first, first):
+                names = ", ".join(sorted(group))
+                self.report(
+                    "cyclic_definition",
+                    f"the values of {names} depend on each other in a cycle",
+                    self.parameters[first].position,
+                )
+
+    def check_unknown(self) -> str | None:
+        if self.option_unknown is not None:
+            if self.option_unknown not in self.parameters:
+                self.report(
+                    "undeclared_parameter",
+                    f"the unknown {self.option_unknown!r} "
+                    "chosen on the command line is not a parameter of the model",
+                )
+                return None
+            return self.option_unknown
+        unknowns = [p for p in self.parameters.values() if p.declared_unknown]
+        if len(unknowns) > 1:
+            names = ", ".join(p.name for p in unknowns)
+            self.report(
+                "several_unknowns",
+                f"several unknowns ({names}); version 1 identifies "
+                "one parameter: choose it with --unknown NAME",
+                unknowns[1].position,
+            )
+            return None
+        return unknowns[0].name if unknowns else None
+
+    def check_bonds(self, graph: nx.MultiDiGraph) -> None:
+        for bond in self.parsed.bonds:
+            if bond.tail.name == bond.head.name:
+                self.report("self_bond", f"a bond from {bond.tail.label} to itself", bond.position)
+        for name, component in self.components.items():
+            inward, outward = graph.in_degree(name), graph.out_degree(name)
+            rule = component.type.ports
+            if inward + outward == 0:
+                self.report(
+                    "unconnected_component",
+                    f"{component.label} is not connected to any bond",
+                    component.position,
+                )
+            elif rule is PortRule.ONE and inward + outward != 1:
+                self.report(
+                    "bad_arity",
+                    f"{component.label} is a one-port but has {inward + outward} bonds",
+                    component.position,
+                )
+            elif rule is PortRule.TWO and (inward, outward) != (1, 1):
+                self.report(
+                    "bad_two_port",
+                    f"{component.label} needs one inward and one "
+                    f"outward bond, not {inward} inward and {outward} outward",
+                    component.position,
+                )
+
+    def check_direction(self, graph: nx.MultiDiGraph) -> list[Diagnostic]:
+        notes = []
+        for name, component in self.components.items():
+            usual = component.type.conventional_inward
+            if usual is None or graph.degree(name) != 1:
+                continue
+            if (graph.in_degree(name) == 1) != usual:
+                way = "out of" if usual else "into"
+                notes.append(
+                    warning(
+                        "bond_direction",
+                        f"the bond of {component.label} points "
+                        f"{way} it, which makes it an active element",
+                        component.position,
+                    )
+                )
+        return notes
+
+    def choose_port(self, role: Role) -> str | None:
+        kind, word = ("no_input", "input") if role is Role.SOURCE else ("no_output", "output")
+        candidates = [c for c in self.components.values() if c.type.role is role]
+        statements = [p for p in self.parsed.ports if p.role == word]
+        for extra in statements[1:]:
+            self.report("syntax", f"a second {word!r} statement", extra.position)
+        if statements:
+            chosen = statements[0]
+            component = self.components.get(chosen.name)
+            if component is None or component.type.name != chosen.type:
+                actual = f" (it is {component.label})" if component else ""
+                self.report(
+                    "undeclared_component",
+                    f"{chosen.type}:{chosen.name} does not exist{actual}",
+                    chosen.position,
+                )
+                return None
+            if component.type.role is not role:
+                self.report(kind, f"{component.label} is not a {role.value}", chosen.position)
+                return None
+            return chosen.name
+        if len(candidates) == 1:
+            return candidates[0].name
+        what = "sources" if role is Role.SOURCE else "detectors"
+        if not candidates:
+            self.report(kind, f"the model has no {role.value} (an {word} is needed)")
+        else:
+            names = ", ".join(c.label for c in candidates)
+            self.report(
+                kind,
+                f"several {what} ({names}): say which is the {word} with an "
+                f"'{word} TYPE:NAME' statement",
+            )
+        return None
+
+
+def build(parsed: ParsedModel, unknown: str | None = None) -> BondGraph:
+    """Validate a parsed model and build its bond graph; raise `ModelError` listing every error.
+
+    `unknown` overrides the model's `unknown` declaration (the compiler's --unknown).
+    """
+    if parsed.header is None or not parsed.bonds:
+        what = "no statement" if parsed.header is None else "no bond"
+        raise ModelError(parsed.source, [error("empty_model", f"the model has {what}")])
+    checker = _Checker(parsed, unknown)
+    checker.check_parameters()
+    checker.check_components()
+    checker.check_names()
+    checker.check_cycles()
+    chosen_unknown = checker.check_unknown()
+
+    graph = nx.MultiDiGraph()
+    for name, component in checker.components.items():
+        graph.add_node(
+            name,
+            component=component,
+            type=component.type.name,
+            argument=component.argument,
+            position=component.position,
+        )
+    for number, bond in enumerate(parsed.bonds, start=1):
+        if bond.tail.name in checker.components and bond.head.name in checker.components:
+            graph.add_edge(
+                bond.tail.name,
+                bond.head.name,
+                key=number,
+                bond=Bond(number, bond.tail.name, bond.head.name, bond.position),
+            )
+    checker.check_bonds(graph)
+    input_name = checker.choose_port(Role.SOURCE)
+    output_name = checker.choose_port(Role.DETECTOR)
+    notes = checker.check_direction(graph)
+    errors = list(dict.fromkeys(checker.problems))
+    if errors:
+        raise ModelError(parsed.source, sorted(errors + notes, key=_order))
+    return BondGraph(
+        source=parsed.source,
+        name=parsed.header.name,
+        description=parsed.header.description,
+        graph=graph,
+        parameters=MappingProxyType(dict(checker.parameters)),
+        input=input_name,
+        output=output_name,
+        unknown=chosen_unknown,
+        warnings=tuple(notes),
+    )
+
+
+def _order(diagnostic: Diagnostic):
+    severity = 0 if diagnostic.severity is Severity.ERROR else 1
+    return (diagnostic.position or Position(0, 0), severity)
+
+
+def summary_counts(bondgraph: BondGraph) -> dict[str, int]:
+    """How many components of each type, in library order."""
+    counts = defaultdict(int)
+    for component in bondgraph.components:
+        counts[component.type.name] += 1
+    return {name: counts[name] for name in LIBRARY if counts[name]}

@@ -1,0 +1,214 @@
+"""The `mtt` command: one subcommand per representation a user may want to see."""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import sys
+import traceback
+from collections.abc import Callable
+
+from mtt import __version__
+from mtt.bondgraph import BondGraph, build, summary_counts
+from mtt.diagnostics import ModelError
+from mtt.parse import ParsedModel, parse
+from mtt.pipeline import read_source
+
+EXIT_OK, EXIT_MODEL_ERROR, EXIT_BUG = 0, 2, 3
+BUG_REPORT = (
+    "mtt: internal error: {error}\n"
+    "This is a bug in mtt, not in your model. Please report it on the mtt issue tracker\n"
+    "with the model file and this message (set MTT_DEBUG=1 to print the traceback)."
+)
+
+
+def _print_json(value) -> None:
+    print(json.dumps(value, sort_keys=False))
+
+
+# check / show -----------------------------------------------------------------
+
+
+def _summary(
+    file: str, parsed: ParsedModel | None, graph: BondGraph | None, problem: ModelError | None
+) -> dict:
+    """The `check --json` record of one file (its shape is a public contract)."""
+    errors = problem.errors if problem else ()
+    warnings = problem.warnings if problem else (graph.warnings if graph else ())
+    record = {
+        "file": file,
+        "ok": problem is None,
+        "errors": [d.to_json() for d in errors],
+        "warnings": [d.to_json() for d in warnings],
+        "model": None, "components": 0, "bonds": 0, "parameters": {}, "unknown": [],
+        "input": None, "output": None,
+    }  # fmt: skip
+    if parsed is not None:
+        record["model"] = parsed.header.name if parsed.header else None
+        record["components"] = len({use.name for use in parsed.mentions})
+        record["bonds"] = len(parsed.bonds)
+        record["parameters"] = {
+            p.name: None if p.value is None else str(p.value.value) for p in parsed.parameters
+        }
+        record["unknown"] = [p.name for p in parsed.parameters if p.unknown]
+    if graph is not None:
+        record["components"] = graph.graph.number_of_nodes()
+        record["input"] = graph.component(graph.input).label
+        record["output"] = graph.component(graph.output).label
+        if graph.unknown and graph.unknown not in record["unknown"]:
+            record["unknown"] = [graph.unknown]
+    return record
+
+
+def _check_one(file: str, unknown: str | None) -> tuple[dict, ModelError | None, BondGraph | None]:
+    parsed = graph = problem = None
+    source = None
+    try:
+        source = read_source(file)
+        parsed = parse(source)
+        graph = build(parsed, unknown=unknown)
+    except ModelError as exc:
+        problem = exc
+    return _summary(file, parsed, graph, problem), problem, graph
+
+
+def cmd_check(args) -> int:
+    status = EXIT_OK
+    for file in args.files:
+        record, problem, graph = _check_one(file, args.unknown)
+        if problem is not None:
+            status = EXIT_MODEL_ERROR
+        if args.json:
+            _print_json(record)
+            continue
+        if problem is not None:
+            print(problem.render(), file=sys.stderr)
+            count = len(problem.errors)
+            print(f"{file}: {count} error{'s' * (count != 1)}", file=sys.stderr)
+            continue
+        for note in graph.warnings:
+            print(graph.source.render(note), file=sys.stderr)
+        unknown = f", unknown {graph.unknown}" if graph.unknown else ""
+        print(
+            f"{file}: ok: model {graph.name}, {record['components']} components, "
+            f"{record['bonds']} bonds, input {record['input']}, output {record['output']}"
+            f"{unknown}"
+        )
+    return status
+
+
+def _table(rows: list[tuple[str, ...]], indent: str = "  ") -> list[str]:
+    widths = [max(len(r[i]) for r in rows) for i in range(len(rows[0]))]
+    return [
+        (indent + "  ".join(cell.ljust(w) for cell, w in zip(row, widths, strict=True))).rstrip()
+        for row in rows
+    ]
+
+
+def describe(graph: BondGraph) -> str:
+    """A readable summary of a bond graph, for `mtt show`."""
+    lines = [f"model {graph.name}" + (f": {graph.description}" if graph.description else "")]
+    lines.append(f"file {graph.source.name}")
+    if graph.parameters:
+        lines += ["", "parameters"]
+        rows = []
+        for p in graph.parameters.values():
+            value = "(no value: symbolic)" if p.value is None else f"= {p.value.value}"
+            role = "unknown" if p.name == graph.unknown else "known"
+            rows.append((p.name, value, role, p.description or ""))
+        lines += _table(rows)
+    counts = summary_counts(graph)
+    lines += ["", f"components ({sum(counts.values())})"]
+    rows = []
+    for type_name in counts:
+        members = [c for c in graph.components if c.type.name == type_name]
+        names = ", ".join(
+            c.name + (f"({c.argument.value})" if c.argument is not None else "") for c in members
+        )
+        rows.append((type_name, members[0].type.summary, names))
+    lines += _table(rows)
+    lines += ["", f"bonds ({len(graph.bonds)}, tail -> head is the direction of positive power)"]
+    rows = [
+        (str(b.number), graph.component(b.tail).label, "->", graph.component(b.head).label)
+        for b in graph.bonds
+    ]
+    lines += _table(rows)
+    lines += [
+        "",
+        f"input   {graph.component(graph.input).label}",
+        f"output  {graph.component(graph.output).label}",
+        f"unknown {graph.unknown or '(none)'}",
+    ]
+    return "\n".join(lines)
+
+
+def _with_graph(action: Callable[[BondGraph, argparse.Namespace], int]):
+    """Run `action` on the file's bond graph; model errors print as a compiler prints them."""
+
+    def run(args) -> int:
+        try:
+            source = read_source(args.file)
+            graph = build(parse(source), unknown=getattr(args, "unknown", None))
+        except ModelError as exc:
+            print(exc.render(), file=sys.stderr)
+            return EXIT_MODEL_ERROR
+        for note in graph.warnings:
+            print(graph.source.render(note), file=sys.stderr)
+        return action(graph, args)
+
+    return run
+
+
+def _show(graph: BondGraph, args) -> int:
+    print(describe(graph))
+    return EXIT_OK
+
+
+# the parser --------------------------------------------------------------------
+
+
+def make_parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(
+        prog="mtt",
+        description="Bond graph models of partially known systems: check them, derive their "
+        "transfer function polynomial in the unknown parameter, and generate estimators.",
+    )
+    parser.add_argument("--version", action="version", version=f"mtt {__version__}")
+    commands = parser.add_subparsers(dest="command", metavar="COMMAND", required=True)
+
+    check = commands.add_parser(
+        "check",
+        help="validate model files",
+        description="Validate .bg model files; exit 0 when every file is valid, 2 otherwise.",
+    )
+    check.add_argument("files", nargs="+", metavar="FILE")
+    check.add_argument("--json", action="store_true", help="print one JSON object per file")
+    check.add_argument("--unknown", metavar="NAME", help="the parameter to identify")
+    check.set_defaults(run=cmd_check)
+
+    show = commands.add_parser(
+        "show",
+        help="summarise a model",
+        description="Print a model's parameters, components, numbered bonds, input and output.",
+    )
+    show.add_argument("file", metavar="FILE")
+    show.add_argument("--unknown", metavar="NAME", help="the parameter to identify")
+    show.set_defaults(run=_with_graph(_show))
+    return parser
+
+
+def main(argv: list[str] | None = None) -> int:
+    args = make_parser().parse_args(argv)
+    try:
+        return args.run(args)
+    except KeyboardInterrupt:
+        print("mtt: interrupted", file=sys.stderr)
+        return 130
+    except BrokenPipeError:
+        return EXIT_OK
+    except Exception as exc:  # noqa: BLE001 - the last line of defence: never a raw traceback
+        if os.environ.get("MTT_DEBUG"):
+            traceback.print_exc()
+        print(BUG_REPORT.format(error=f"{type(exc).__name__}: {exc}"), file=sys.stderr)
+        return EXIT_BUG

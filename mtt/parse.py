@@ -1,0 +1,424 @@
+"""Stage 1: text -> parse tree -> `ParsedModel`.
+
+The grammar in `grammars/bg.lark` is run by lark; a transformer turns the tree
+into frozen dataclasses with source positions. Expressions become sympy objects
+built node by node from the tree (exact Rationals for decimal literals): no text
+from a model ever reaches eval, exec, sympify or parse_expr.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from fractions import Fraction
+from functools import cache
+
+import lark
+import sympy
+from lark import Token, Transformer
+
+from mtt.diagnostics import Diagnostic, ModelError, Position, Source, error
+from mtt.resources import resource_dir
+
+FUNCTIONS = {
+    "sqrt": sympy.sqrt,
+    "exp": sympy.exp,
+    "log": sympy.log,
+    "sin": sympy.sin,
+    "cos": sympy.cos,
+}
+CONSTANTS = {"pi": sympy.pi}
+LAPLACE = "s"
+RESERVED = frozenset({LAPLACE, *FUNCTIONS, *CONSTANTS})
+
+# Exact arithmetic on untrusted input must not be asked to build astronomically
+# large numbers (`1e999999999`, `10^10^10`): these bounds keep every literal and
+# every numeric power to at most this many decimal digits.
+MAX_DIGITS = 5000
+MAX_SYNTAX_ERRORS = 50
+
+
+@dataclass(frozen=True)
+class NameUse:
+    name: str
+    position: Position
+
+
+@dataclass(frozen=True)
+class Expression:
+    """A parsed expression: its exact sympy value and every name it uses, with places."""
+
+    value: sympy.Expr
+    names: tuple[NameUse, ...]
+    position: Position
+
+
+@dataclass(frozen=True)
+class ComponentUse:
+    """One mention of `TYPE:NAME [(EXPR)]`, in a declaration or a bond."""
+
+    type: str
+    name: str
+    argument: Expression | None
+    position: Position
+
+    @property
+    def label(self) -> str:
+        return f"{self.type}:{self.name}"
+
+
+@dataclass(frozen=True)
+class ModelHeader:
+    name: str
+    description: str | None
+    position: Position
+
+
+@dataclass(frozen=True)
+class ParameterDecl:
+    name: str
+    value: Expression | None
+    description: str | None
+    unknown: bool
+    position: Position
+
+
+@dataclass(frozen=True)
+class ComponentDecl:
+    use: ComponentUse
+    description: str | None
+
+
+@dataclass(frozen=True)
+class BondText:
+    """`tail -> head`: positive power flows from tail to head."""
+
+    tail: ComponentUse
+    head: ComponentUse
+    position: Position
+
+
+@dataclass(frozen=True)
+class PortDecl:
+    """An `input` or `output` statement."""
+
+    role: str
+    type: str
+    name: str
+    position: Position
+
+
+@dataclass(frozen=True)
+class ParsedModel:
+    source: Source
+    header: ModelHeader | None
+    parameters: tuple[ParameterDecl, ...]
+    declarations: tuple[ComponentDecl, ...]
+    bonds: tuple[BondText, ...]
+    ports: tuple[PortDecl, ...]
+
+    @property
+    def mentions(self) -> tuple[ComponentUse, ...]:
+        """Every component mention, in file order."""
+        uses = [d.use for d in self.declarations]
+        for bond in self.bonds:
+            uses += [bond.tail, bond.head]
+        return tuple(sorted(set(uses), key=lambda u: u.position))
+
+
+@cache
+def _parser(start: str) -> lark.Lark:
+    grammar = (resource_dir("grammars") / "bg.lark").read_text(encoding="utf-8")
+    return lark.Lark(grammar, start=start, parser="lalr", propagate_positions=True)
+
+
+def _at(token: Token) -> Position:
+    return Position(token.line, token.column)
+
+
+def _describe_terminal(name: str, parser: lark.Lark) -> str:
+    named = {
+        "NAME": "a name",
+        "NUMBER": "a number",
+        "STRING": 'a "description"',
+        "COMPONENT": "a component TYPE:NAME",
+        "_NL": "end of line",
+        "$END": "end of file",
+    }
+    if name in named:
+        return named[name]
+    try:
+        return repr(parser.get_terminal(name).pattern.value)
+    except KeyError:
+        return name
+
+
+def _syntax_message(exc: lark.exceptions.UnexpectedInput, parser: lark.Lark) -> str:
+    if isinstance(exc, lark.exceptions.UnexpectedCharacters):
+        return f"unexpected character {exc.char!r}"
+    if isinstance(exc, lark.exceptions.UnexpectedToken):
+        token = exc.token
+        found = (
+            _describe_terminal(token.type, parser)
+            if token.type in ("_NL", "$END")
+            else repr(str(token))
+        )
+        if "COMPONENT" in exc.expected and "MODEL" in exc.expected:
+            return (
+                f"unexpected {found}; a statement is model, param, unknown, input, output,"
+                " a component TYPE:NAME or a bond A -> B"
+            )
+        expected = sorted({_describe_terminal(t, parser) for t in exc.expected})
+        return f"unexpected {found}; expected {' or '.join(expected)}"
+    return "unexpected end of file"
+
+
+def _number(text: str) -> sympy.Rational:
+    mantissa, _, exponent = text.lower().partition("e")
+    if exponent and abs(int(exponent)) > MAX_DIGITS:
+        raise _ExpressionProblem(f"number {text} is out of range")
+    if len(mantissa) > MAX_DIGITS:
+        raise _ExpressionProblem("number has too many digits")
+    value = Fraction(text)
+    return sympy.Rational(value.numerator, value.denominator)
+
+
+def _digits(value: sympy.Rational) -> float:
+    return math.log10(max(abs(value.p), abs(value.q), 1))
+
+
+class _ExpressionProblem(Exception):
+    """Raised inside the transformer; becomes a positioned `syntax` diagnostic."""
+
+
+@dataclass(frozen=True)
+class _Partial:
+    """An expression under construction: sympy value and the names it uses."""
+
+    value: sympy.Expr
+    names: tuple[NameUse, ...]
+    position: Position
+
+
+def _binary(op):
+    def build(self, children: list[_Partial]) -> _Partial:
+        a, b = children
+        return _Partial(op(a.value, b.value), a.names + b.names, a.position)
+
+    return build
+
+
+class _ToModel(Transformer):
+    """Bottom-up: tokens and subtrees to sympy values and statement records."""
+
+    def __init__(self, problems: list[Diagnostic]):
+        super().__init__()
+        self.problems = problems
+
+    # expressions
+    def number(self, children):
+        (token,) = children
+        try:
+            return _Partial(_number(str(token)), (), _at(token))
+        except _ExpressionProblem as problem:
+            self.problems.append(error("syntax", str(problem), _at(token)))
+            return _Partial(sympy.Integer(0), (), _at(token))
+
+    def name(self, children):
+        (token,) = children
+        if str(token) in CONSTANTS:
+            return _Partial(CONSTANTS[str(token)], (), _at(token))
+        use = NameUse(str(token), _at(token))
+        return _Partial(sympy.Symbol(str(token)), (use,), _at(token))
+
+    def call(self, children):
+        token, argument = children
+        function = FUNCTIONS.get(str(token))
+        if function is None:
+            known = " ".join(FUNCTIONS)
+            self.problems.append(
+                error("syntax", f"unknown function {str(token)!r} (known: {known})", _at(token))
+            )
+            return argument
+        return _Partial(function(argument.value), argument.names, _at(token))
+
+    add = _binary(lambda a, b: a + b)
+    sub = _binary(lambda a, b: a - b)
+    mul = _binary(lambda a, b: a * b)
+
+    def div(self, children):
+        a, b = children
+        if b.value == 0:
+            self.problems.append(error("syntax", "division by zero", b.position))
+            return a
+        return _Partial(a.value / b.value, a.names + b.names, a.position)
+
+    def neg(self, children):
+        (a,) = children
+        return _Partial(-a.value, a.names, a.position)
+
+    def pow(self, children):
+        base, operator, exponent = children
+        b, x = base.value, exponent.value
+        if isinstance(x, sympy.Number) and isinstance(b, sympy.Number):
+            too_big = abs(x) * _digits(b) > MAX_DIGITS or (b == 0 and x < 0)
+        else:
+            too_big = isinstance(x, sympy.Number) and abs(x) > MAX_DIGITS
+        if too_big:
+            self.problems.append(error("syntax", "power out of range", _at(operator)))
+            return base
+        return _Partial(b**x, base.names + exponent.names, base.position)
+
+    def expression(self, children):
+        (partial,) = children
+        return partial
+
+    # statements
+    @staticmethod
+    def _expression(partial: _Partial | None) -> Expression | None:
+        if partial is None:
+            return None
+        return Expression(partial.value, partial.names, partial.position)
+
+    @staticmethod
+    def _text(token: Token | None) -> str | None:
+        return None if token is None else str(token)[1:-1]
+
+    def model_stmt(self, children):
+        name, description = children
+        return ModelHeader(str(name), self._text(description), _at(name))
+
+    def _parameter(self, children, unknown: bool):
+        name, value, description = children
+        return ParameterDecl(
+            str(name), self._expression(value), self._text(description), unknown, _at(name)
+        )
+
+    def param_stmt(self, children):
+        return self._parameter(children, unknown=False)
+
+    def unknown_stmt(self, children):
+        return self._parameter(children, unknown=True)
+
+    def component(self, children):
+        token, argument = children
+        type_, _, name = str(token).partition(":")
+        return ComponentUse(type_, name, self._expression(argument), _at(token))
+
+    def declaration(self, children):
+        use, description = children
+        return ComponentDecl(use, self._text(description))
+
+    def bonds(self, children):
+        uses = children[::2]
+        arrows = children[1::2]
+        return [
+            BondText(tail, head, _at(arrow))
+            for tail, head, arrow in zip(uses, uses[1:], arrows, strict=False)
+        ]
+
+    def _port(self, children, role: str):
+        (token,) = children
+        type_, _, name = str(token).partition(":")
+        return PortDecl(role, type_, name, _at(token))
+
+    def input_stmt(self, children):
+        return self._port(children, "input")
+
+    def output_stmt(self, children):
+        return self._port(children, "output")
+
+
+def _blank_line(text: str, line: int) -> str:
+    """The text with one line's content replaced by spaces: positions elsewhere stay put."""
+    lines = text.split("\n")
+    lines[line - 1] = " " * len(lines[line - 1])
+    return "\n".join(lines)
+
+
+def _parse_tree(source: Source) -> tuple[lark.Tree | None, list[Diagnostic]]:
+    """Parse, and on a syntax error blank the offending line and go on to find the others."""
+    parser = _parser("file")
+    text, problems = source.text, []
+    while True:
+        try:
+            return parser.parse(text), problems
+        except lark.exceptions.UnexpectedInput as exc:
+            position = Position(exc.line, exc.column) if exc.line > 0 else None
+            problems.append(error("syntax", _syntax_message(exc, parser), position))
+            if position is None or len(problems) >= MAX_SYNTAX_ERRORS:
+                return None, problems
+            text = _blank_line(text, position.line)
+
+
+def parse(source: Source) -> ParsedModel:
+    """Read a model's text; raise `ModelError` with every syntax error found."""
+    tree, problems = _parse_tree(source)
+    statements: list = []
+    if tree is not None:
+        for item in _ToModel(problems).transform(tree).children:
+            statements.extend(item if isinstance(item, list) else [item])
+    header = None
+    for index, statement in enumerate(statements):
+        if isinstance(statement, ModelHeader):
+            if header is not None:
+                problems.append(error("syntax", "a second 'model' line", statement.position))
+            elif index > 0:
+                problems.append(
+                    error(
+                        "syntax", "the 'model' line must be the first statement", statement.position
+                    )
+                )
+            header = statement
+    if statements and header is None:
+        first = statements[0]
+        where = first.use.position if isinstance(first, ComponentDecl) else _first_position(first)
+        problems.append(error("syntax", "the file must begin with a 'model NAME' line", where))
+    if problems:
+        raise ModelError(source, sorted(problems, key=_order))
+    return ParsedModel(
+        source=source,
+        header=header,
+        parameters=tuple(s for s in statements if isinstance(s, ParameterDecl)),
+        declarations=tuple(s for s in statements if isinstance(s, ComponentDecl)),
+        bonds=tuple(s for s in statements if isinstance(s, BondText)),
+        ports=tuple(s for s in statements if isinstance(s, PortDecl)),
+    )
+
+
+def _first_position(statement) -> Position:
+    return statement.tail.position if isinstance(statement, BondText) else statement.position
+
+
+def _order(diagnostic: Diagnostic):
+    return diagnostic.position or Position(0, 0)
+
+
+def parse_expression(text: str, variables: frozenset[str] = frozenset({LAPLACE})) -> sympy.Expr:
+    """A lone expression (a filter polynomial on the command line, say) in the named variables.
+
+    Raises `ModelError` (reported against `<expression>`) for syntax errors and unknown names.
+    """
+    source = Source("<expression>", text)
+    problems: list[Diagnostic] = []
+    try:
+        tree = _parser("expression").parse(text)
+    except lark.exceptions.UnexpectedInput as exc:
+        position = Position(exc.line, exc.column) if exc.line > 0 else None
+        raise ModelError(
+            source, [error("syntax", _syntax_message(exc, _parser("expression")), position)]
+        ) from None
+    partial = _ToModel(problems).transform(tree)
+    for use in partial.names:
+        if use.name not in variables:
+            allowed = ", ".join(sorted(variables))
+            problems.append(
+                error(
+                    "undeclared_parameter",
+                    f"unknown name {use.name!r} (use {allowed})",
+                    use.position,
+                )
+            )
+    if problems:
+        raise ModelError(source, problems)
+    return partial.value

@@ -1,0 +1,26 @@
+"""The chain of representations, stage by stage, for callers that start from a file."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+from mtt.bondgraph import BondGraph, build
+from mtt.diagnostics import ModelError, Source, error
+from mtt.parse import parse
+
+
+def read_source(path: str | Path) -> Source:
+    """A model file's text; unreadable files are model errors too (kind `io`)."""
+    name = str(path)
+    try:
+        return Source(name, Path(path).read_text(encoding="utf-8"))
+    except (OSError, UnicodeDecodeError) as exc:
+        reason = exc.strerror if isinstance(exc, OSError) and exc.strerror else str(exc)
+        raise ModelError(
+            Source(name, ""), [error("io", f"cannot read the file: {reason}")]
+        ) from None
+
+
+def load(path: str | Path, unknown: str | None = None) -> BondGraph:
+    """Text -> parse tree -> validated bond graph."""
+    return build(parse(read_source(path)), unknown=unknown)
