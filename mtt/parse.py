@@ -33,8 +33,10 @@ RESERVED = frozenset({LAPLACE, *FUNCTIONS, *CONSTANTS})
 
 # Exact arithmetic on untrusted input must not be asked to build astronomically
 # large numbers (`1e999999999`, `10^10^10`): these bounds keep every literal and
-# every numeric power to at most this many decimal digits.
-MAX_DIGITS = 5000
+# every numeric result to at most this many decimal digits. It stays below the
+# 4300 digits CPython converts between int and str by default (sys.int_info), so
+# every accepted value can still be printed.
+MAX_DIGITS = 4000
 MAX_SYNTAX_ERRORS = 50
 
 
@@ -175,16 +177,21 @@ def _syntax_message(exc: lark.exceptions.UnexpectedInput, parser: lark.Lark) -> 
 
 def _number(text: str) -> sympy.Rational:
     mantissa, _, exponent = text.lower().partition("e")
-    if exponent and abs(int(exponent)) > MAX_DIGITS:
-        raise _ExpressionProblem(f"number {text} is out of range")
     if len(mantissa) > MAX_DIGITS:
         raise _ExpressionProblem("number has too many digits")
-    value = Fraction(text)
+    sign = -1 if exponent.startswith("-") else 1
+    exponent = exponent.lstrip("+-").lstrip("0") or "0"
+    if len(exponent) > len(str(MAX_DIGITS)):
+        raise _ExpressionProblem("number out of range")
+    value = Fraction(mantissa) * Fraction(10) ** (sign * int(exponent))
     return sympy.Rational(value.numerator, value.denominator)
 
 
-def _digits(value: sympy.Rational) -> float:
-    return math.log10(max(abs(value.p), abs(value.q), 1))
+def _digits(value: sympy.Expr) -> float:
+    """The decimal digits of the largest numerator or denominator among value's numbers."""
+    return max(
+        (math.log10(max(abs(r.p), abs(r.q), 1)) for r in value.atoms(sympy.Rational)), default=0
+    )
 
 
 class _ExpressionProblem(Exception):
@@ -203,7 +210,7 @@ class _Partial:
 def _binary(op):
     def build(self, children: list[_Partial]) -> _Partial:
         a, b = children
-        return _Partial(op(a.value, b.value), a.names + b.names, a.position)
+        return self._result(op(a.value, b.value), a.names + b.names, a.position)
 
     return build
 
@@ -215,14 +222,28 @@ class _ToModel(Transformer):
         super().__init__()
         self.problems = problems
 
+    def _result(self, value, names, position: Position) -> _Partial:
+        """A computed value, unless it is undefined or too large: that is reported, and a
+        placeholder symbol stands in for it so that no second error follows from it."""
+        problem = None
+        if value.has(sympy.nan, sympy.zoo, sympy.oo, -sympy.oo):
+            problem = "the value is undefined or infinite"
+        elif _digits(value) > MAX_DIGITS:
+            problem = "number out of range"
+        if problem:
+            self.problems.append(error("syntax", problem, position))
+            return _Partial(sympy.Dummy(), names, position)
+        return _Partial(value, names, position)
+
     # expressions
     def number(self, children):
         (token,) = children
         try:
-            return _Partial(_number(str(token)), (), _at(token))
+            value = _number(str(token))
         except _ExpressionProblem as problem:
             self.problems.append(error("syntax", str(problem), _at(token)))
             return _Partial(sympy.Integer(0), (), _at(token))
+        return self._result(value, (), _at(token))
 
     def name(self, children):
         (token,) = children
@@ -240,7 +261,7 @@ class _ToModel(Transformer):
                 error("syntax", f"unknown function {str(token)!r} (known: {known})", _at(token))
             )
             return argument
-        return _Partial(function(argument.value), argument.names, _at(token))
+        return self._result(function(argument.value), argument.names, _at(token))
 
     add = _binary(lambda a, b: a + b)
     sub = _binary(lambda a, b: a - b)
@@ -251,7 +272,7 @@ class _ToModel(Transformer):
         if b.value == 0:
             self.problems.append(error("syntax", "division by zero", b.position))
             return a
-        return _Partial(a.value / b.value, a.names + b.names, a.position)
+        return self._result(a.value / b.value, a.names + b.names, a.position)
 
     def neg(self, children):
         (a,) = children
@@ -260,14 +281,15 @@ class _ToModel(Transformer):
     def pow(self, children):
         base, operator, exponent = children
         b, x = base.value, exponent.value
-        if isinstance(x, sympy.Number) and isinstance(b, sympy.Number):
-            too_big = abs(x) * _digits(b) > MAX_DIGITS or (b == 0 and x < 0)
+        if isinstance(x, sympy.Number):
+            size = _digits(b) if isinstance(b, sympy.Number) else max(_digits(b), 1)
+            too_big = abs(x) * size > MAX_DIGITS or (b == 0 and x < 0)
         else:
-            too_big = isinstance(x, sympy.Number) and abs(x) > MAX_DIGITS
+            too_big = False
         if too_big:
             self.problems.append(error("syntax", "power out of range", _at(operator)))
             return base
-        return _Partial(b**x, base.names + exponent.names, base.position)
+        return self._result(b**x, base.names + exponent.names, base.position)
 
     def expression(self, children):
         (partial,) = children
