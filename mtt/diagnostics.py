@@ -48,8 +48,10 @@ class Source:
     text: str = field(repr=False)
 
     def line(self, number: int) -> str:
-        lines = self.text.splitlines()
-        return lines[number - 1] if 0 < number <= len(lines) else ""
+        # Lines end at "\n" only, as the parser counts them (splitlines would also
+        # split at form feeds and Unicode line separators inside descriptions).
+        lines = self.text.split("\n")
+        return lines[number - 1].removesuffix("\r") if 0 < number <= len(lines) else ""
 
     def render(self, diagnostic: Diagnostic) -> str:
         """`FILE:LINE:COL: error[KIND]: message`, the source line and a caret."""
