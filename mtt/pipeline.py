@@ -5,8 +5,14 @@ from __future__ import annotations
 from pathlib import Path
 
 from mtt.bondgraph import BondGraph, build
+from mtt.causality import assign
 from mtt.diagnostics import ModelError, Source, error
+from mtt.equations import derive
+from mtt.options import ParameterChoice
+from mtt.parameters import parametrise
 from mtt.parse import parse
+from mtt.theta import Theta, theta_matrix
+from mtt.transfer import TransferFunction, transfer_function
 
 
 def read_source(path: str | Path) -> Source:
@@ -24,3 +30,17 @@ def read_source(path: str | Path) -> Source:
 def load(path: str | Path, unknown: str | None = None) -> BondGraph:
     """Text -> parse tree -> validated bond graph."""
     return build(parse(read_source(path)), unknown=unknown)
+
+
+DEFAULT_CHOICE = ParameterChoice()
+
+
+def transfer_for(path: str | Path, choice: ParameterChoice = DEFAULT_CHOICE) -> TransferFunction:
+    """Text -> ... -> exact canonical transfer function."""
+    graph = load(path, unknown=choice.unknown)
+    return transfer_function(derive(assign(graph), parametrise(graph, choice)))
+
+
+def theta_for(path: str | Path, choice: ParameterChoice = DEFAULT_CHOICE) -> Theta:
+    """Text -> ... -> Theta: everything a generated estimator needs."""
+    return theta_matrix(transfer_for(path, choice))

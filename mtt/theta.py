@@ -12,6 +12,9 @@ from dataclasses import dataclass
 
 import sympy
 
+from mtt.diagnostics import ModelError, error
+from mtt.transfer import TransferFunction
+
 
 @dataclass(frozen=True)
 class Theta:
@@ -39,3 +42,54 @@ class Theta:
         return tuple(f"a{i}" for i in range(self.n + 1)) + tuple(
             f"-b{i}" for i in range(self.m + 1)
         )
+
+
+def theta_matrix(tf: TransferFunction) -> Theta:
+    """Theta from the canonical transfer function; raise `ModelError` if there is no unknown."""
+    equations = tf.equations
+    graph = equations.causal.bondgraph
+    params = equations.parametrisation
+    if params.unknown is None:
+        raise ModelError(
+            graph.source,
+            [
+                error(
+                    "no_unknown",
+                    "the model declares no unknown parameter: add an 'unknown' "
+                    "declaration or choose one with --unknown NAME",
+                )
+            ],
+        )
+    n, m = tf.degree("den"), tf.degree("num")
+    rows: list[dict[int, sympy.Expr]] = [{} for _ in range(n + m + 2)]
+    rest = tf.gens[2:]  # s and the unknown come first
+    for offset, poly, sign in ((0, tf.den, 1), (n + 1, tf.num, -1)):
+        for monom, coefficient in poly.terms():
+            power_s, power_k, *others = monom
+            term = (
+                sign
+                * sympy.Integer(int(coefficient))
+                * sympy.Mul(*(g**e for g, e in zip(rest, others, strict=True)))
+            )
+            row = rows[offset + power_s]
+            row[power_k] = row.get(power_k, sympy.Integer(0)) + term
+    N = max((j for row in rows for j in row), default=0)
+    matrix = sympy.Matrix([[row.get(j, sympy.Integer(0)) for j in range(N + 1)] for row in rows])
+    return Theta(
+        model=graph.name,
+        description=graph.description,
+        source_name=graph.source.name,
+        input=graph.component(graph.input).label,
+        output=graph.component(graph.output).label,
+        unknown=params.unknown,
+        symbols=params.symbols,
+        defaults=params.defaults,
+        assumed=params.assumed,
+        true_value=params.true_value,
+        num=tf.numerator,
+        den=tf.denominator,
+        n=n,
+        m=m,
+        N=N,
+        matrix=matrix,
+    )

@@ -1,0 +1,297 @@
+"""Stage 4: `CausalBondGraph` -> `Equations`, the descriptor state-space form.
+
+Each component's constitutive relation (from the library) is solved for the
+variables its causality makes it impose: this gives one explicit, linear equation
+per bond variable. Substituting them in dependency order expresses everything in
+the input u, the energy variables of storage in integral causality and the
+derivatives of the dependent (derivative-causality) ones; the strongly connected
+pieces of that dependency graph are the algebraic loops, solved exactly together.
+The result is E x' = A x + B u, y = C x + D u with x the energy variables (q of C,
+p of I), all exact, with coefficients in the field of rational functions of the
+unknown and the kept symbols.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import networkx as nx
+import sympy
+from sympy.polys.domains import QQ
+from sympy.polys.domains.domain import Domain
+from sympy.polys.matrices import DomainMatrix
+
+from mtt.bondgraph import Component
+from mtt.causality import CausalBondGraph
+from mtt.components import PortVariables, Role
+from mtt.diagnostics import ModelError, error
+from mtt.parameters import Parametrisation
+
+INPUT, OUTPUT = "u", "y"
+
+Form = dict  # variable name -> coefficient (a domain element): a linear combination
+
+
+@dataclass(frozen=True)
+class Equations:
+    causal: CausalBondGraph
+    parametrisation: Parametrisation
+    domain: Domain  # the coefficient field: QQ, or QQ(unknown, symbols, ...)
+    relations: tuple[tuple[str, sympy.Expr], ...]  # the causal equations, variable = expression
+    states: tuple[str, ...]  # the descriptor variables x
+    E: DomainMatrix
+    A: DomainMatrix
+    B: DomainMatrix
+    C: DomainMatrix
+    D: DomainMatrix
+
+    def matrices(self) -> dict[str, sympy.Matrix]:
+        """E, A, B, C, D as exact sympy matrices."""
+        return {name: getattr(self, name).to_Matrix() for name in "EABCD"}
+
+
+def _energy(component: Component) -> str:
+    return f"{component.type.energy_prefix}_{component.name}"
+
+
+def _coefficient_domain(values: list[sympy.Expr], free: tuple[str, ...]) -> Domain:
+    """QQ, or the rational functions in the free parameters (and any irrational constants)."""
+    gens = [sympy.Symbol(name) for name in free]
+    extra = set()
+    for value in values:
+        for part in value.as_numer_denom():
+            if not part.is_Rational:
+                extra.update(sympy.Poly(part).gens)
+    gens += sorted(extra - set(gens), key=sympy.default_sort_key)
+    return QQ.frac_field(*gens) if gens else QQ
+
+
+def _parameter_values(causal: CausalBondGraph, parametrisation: Parametrisation) -> dict:
+    """Each component's exact parameter value, checked to be rational in the unknown."""
+    graph = causal.bondgraph
+    problems, values = [], {}
+    unknown = sympy.Symbol(parametrisation.unknown) if parametrisation.unknown else None
+    for component in graph.components:
+        if component.argument is None:
+            continue
+        value = parametrisation.apply(component.argument.value)
+        where = component.argument.position
+        if value.has(sympy.zoo, sympy.oo, sympy.nan):
+            problems.append(
+                error(
+                    "singular_model",
+                    f"the parameter of {component.label} is "
+                    f"infinite ({component.argument.value} = {value})",
+                    where,
+                )
+            )
+        elif unknown is not None and not value.is_rational_function(unknown):
+            problems.append(
+                error(
+                    "non_rational_unknown",
+                    f"the parameter of "
+                    f"{component.label} is {value}, not a rational function of "
+                    f"the unknown {unknown}",
+                    where,
+                )
+            )
+        values[component.name] = value
+    if problems:
+        raise ModelError(graph.source, problems)
+    return values
+
+
+def _port_variables(causal: CausalBondGraph, component: Component, value) -> PortVariables:
+    graph = causal.bondgraph
+    ports = graph.ports(component.name)
+    storage = component.type.role is Role.STORAGE
+    return PortVariables(
+        efforts=tuple(f"e{p.bond}" for p in ports),
+        flows=tuple(f"f{p.bond}" for p in ports),
+        inward=tuple(p.inward for p in ports),
+        parameter=value,
+        energy=_energy(component) if storage else None,
+        rate="d" + _energy(component) if storage else None,
+        drive=INPUT if component.name == graph.input else None,
+        measure=OUTPUT if component.name == graph.output else None,
+    )
+
+
+def _outputs(causal: CausalBondGraph, component: Component, v: PortVariables) -> list[str]:
+    """The variables a component imposes under its causality."""
+    ports = causal.bondgraph.ports(component.name)
+    names = [
+        e if causal.imposes_effort(component.name, p.bond) else f
+        for p, e, f in zip(ports, v.efforts, v.flows, strict=True)
+    ]
+    if v.energy:
+        names.append(v.rate if causal.integral(component.name) else v.energy)
+    if v.measure:
+        names.append(v.measure)
+    return names
+
+
+def _solve(rows: list[dict], unknowns: list[str], K: Domain) -> dict[str, Form] | None:
+    """Solve linear rows (forms equal to zero) for `unknowns` in terms of the other variables."""
+    others = sorted({name for row in rows for name in row} - set(unknowns))
+    lhs = DomainMatrix(
+        [[K.convert(row.get(u, K.zero)) for u in unknowns] for row in rows],
+        (len(rows), len(unknowns)),
+        K,
+    )
+    rhs = DomainMatrix(
+        [[-K.convert(row.get(o, K.zero)) for o in others] for row in rows],
+        (len(rows), len(others)),
+        K,
+    )
+    if lhs.rank() < len(unknowns):
+        return None
+    solution = lhs.lu_solve(rhs) if others else None
+    return {
+        u: {
+            o: solution[i, j].element
+            for j, o in enumerate(others)
+            if solution is not None and solution[i, j].element != K.zero
+        }
+        for i, u in enumerate(unknowns)
+    }
+
+
+def derive(causal: CausalBondGraph, parametrisation: Parametrisation) -> Equations:
+    """The causal equations and the descriptor form; raise `ModelError` if they are singular."""
+    graph = causal.bondgraph
+    values = _parameter_values(causal, parametrisation)
+    K = _coefficient_domain(list(values.values()), parametrisation.free)
+    explicit: dict[str, Form] = {}
+    storage = [c for c in graph.components if c.type.role is Role.STORAGE]
+    for component in graph.components:
+        v = _port_variables(causal, component, values.get(component.name))
+        rows = [
+            {name: K.from_sympy(c) for name, c in row.items()} for row in component.type.relation(v)
+        ]
+        outputs = _outputs(causal, component, v)
+        solved = _solve(rows, outputs, K)
+        if solved is None:
+            raise ModelError(
+                graph.source,
+                [
+                    error(
+                        "singular_model",
+                        f"{component.label} cannot impose {', '.join(outputs)} "
+                        f"with parameter {values.get(component.name)}",
+                        component.position,
+                    )
+                ],
+            )
+        explicit.update(solved)
+
+    resolved = _eliminate(explicit, K, graph)
+    relations = tuple((name, _to_expr(form, K)) for name, form in explicit.items())
+    return _descriptor(causal, parametrisation, K, storage, resolved, relations)
+
+
+def _eliminate(explicit: dict[str, Form], K: Domain, graph) -> dict[str, Form]:
+    """Every variable in terms of the base variables, loops solved jointly."""
+    depends = nx.DiGraph()
+    depends.add_nodes_from(explicit)
+    for name, form in explicit.items():
+        depends.add_edges_from((name, w) for w in form if w in explicit)
+    condensed = nx.condensation(depends)
+    resolved: dict[str, Form] = {}
+
+    def substitute(form: Form, skip: set[str] = frozenset()) -> Form:
+        total: Form = {}
+        for w, c in form.items():
+            if w in skip:
+                continue
+            for base, cb in (resolved[w] if w in explicit else {w: K.one}).items():
+                total[base] = total.get(base, K.zero) + c * cb
+        return {b: c for b, c in total.items() if c != K.zero}
+
+    for node in reversed(list(nx.topological_sort(condensed))):
+        members = sorted(condensed.nodes[node]["members"])
+        if len(members) == 1 and not depends.has_edge(members[0], members[0]):
+            resolved[members[0]] = substitute(explicit[members[0]])
+            continue
+        # an algebraic loop: v - sum(a_vw w, w in loop) = the rest, solved exactly together
+        rows = []
+        for v in members:
+            row = {w: -c for w, c in explicit[v].items() if w in members}
+            row[v] = row.get(v, K.zero) + K.one
+            for base, c in substitute(explicit[v], set(members)).items():
+                row[base] = row.get(base, K.zero) - c
+            rows.append(row)
+        solved = _solve(rows, members, K)
+        if solved is None:
+            raise ModelError(
+                graph.source,
+                [
+                    error(
+                        "singular_model",
+                        f"an algebraic loop has no unique solution (through {', '.join(members)})",
+                    )
+                ],
+            )
+        resolved.update(solved)
+    return resolved
+
+
+def _to_expr(form: Form, K: Domain) -> sympy.Expr:
+    return sympy.Add(*(K.to_sympy(c) * sympy.Symbol(w) for w, c in form.items()))
+
+
+def _descriptor(causal, parametrisation, K, storage, resolved, relations) -> Equations:
+    states = [_energy(c) for c in storage]
+    rates = {"d" + x: i for i, x in enumerate(states)}
+    index = {x: i for i, x in enumerate(states)}
+    output = resolved.get(OUTPUT, {})
+    auxiliary = [w for w in rates if w in output]  # y depends on a dependent state's rate
+    names = states + auxiliary
+    size = len(names)
+    E = [[K.zero] * size for _ in range(size)]
+    A = [[K.zero] * size for _ in range(size)]
+    B = [[K.zero] for _ in range(size)]
+
+    def place(row: int, form: Form, sign) -> None:
+        for w, c in form.items():
+            if w == INPUT:
+                B[row][0] += sign * c
+            elif w in index:
+                A[row][index[w]] += sign * c
+            elif w in rates:
+                E[row][rates[w]] -= sign * c
+
+    for row, component in enumerate(storage):
+        x = states[row]
+        if causal.integral(component.name):  # x' = form
+            E[row][row] += K.one
+            place(row, resolved["d" + x], K.one)
+        else:  # 0 = -x + form
+            A[row][row] -= K.one
+            place(row, resolved[x], K.one)
+    for j, w in enumerate(auxiliary):  # x_j' = z_j
+        row = len(states) + j
+        E[row][rates[w]] += K.one
+        A[row][row] += K.one
+    C = [[K.zero] * size]
+    D = [[K.zero]]
+    for w, c in output.items():
+        if w == INPUT:
+            D[0][0] += c
+        elif w in index:
+            C[0][index[w]] += c
+        else:
+            C[0][len(states) + auxiliary.index(w)] += c
+    matrix = lambda rows, cols: DomainMatrix(rows, (len(rows), cols), K)  # noqa: E731
+    return Equations(
+        causal=causal,
+        parametrisation=parametrisation,
+        domain=K,
+        relations=relations,
+        states=tuple(names),
+        E=matrix(E, size),
+        A=matrix(A, size),
+        B=matrix(B, 1),
+        C=matrix(C, size),
+        D=matrix(D, 1),
+    )

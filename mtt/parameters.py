@@ -1,0 +1,85 @@
+"""Which parameters stay symbolic and what the others are worth, exactly.
+
+The equations are written in the unknown and the kept symbols only: every other
+parameter is replaced by its value from the file (or from --set), resolved through
+the parameters it names.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from functools import cache
+from types import MappingProxyType
+
+import sympy
+
+from mtt.bondgraph import BondGraph
+from mtt.diagnostics import ModelError, error
+from mtt.options import ParameterChoice
+
+
+@dataclass(frozen=True)
+class Parametrisation:
+    unknown: str | None
+    symbols: tuple[str, ...]  # kept symbolic, in file order (the unknown not included)
+    assumed: MappingProxyType  # name -> exact value substituted
+    defaults: MappingProxyType  # kept symbol -> its numeric value from the file, or None
+    true_value: sympy.Expr | None  # the unknown's value from the file or --set
+    substitution: MappingProxyType  # Symbol -> value, for every assumed parameter
+
+    def apply(self, expression: sympy.Expr) -> sympy.Expr:
+        return expression.xreplace(dict(self.substitution))
+
+    @property
+    def free(self) -> tuple[str, ...]:
+        """The names the equations are written in: the unknown first, then the symbols."""
+        return ((self.unknown,) if self.unknown else ()) + self.symbols
+
+
+def parametrise(graph: BondGraph, choice: ParameterChoice) -> Parametrisation:
+    """Resolve the parameters of `graph` under `choice` (raise `ModelError` for bad names)."""
+    problems = [
+        error("undeclared_parameter", f"{option} names {name!r}, which is not a parameter")
+        for option, names in (("--keep", choice.keep), ("--set", choice.overrides))
+        for name in sorted(names)
+        if name not in graph.parameters
+    ]
+    if problems:
+        raise ModelError(graph.source, problems)
+    unknown = graph.unknown
+    values = {
+        name: choice.overrides.get(name, p.value.value if p.value is not None else None)
+        for name, p in graph.parameters.items()
+    }
+    symbolic = {
+        name
+        for name, value in values.items()
+        if value is None or choice.symbolic or name in choice.keep or name == unknown
+    }
+
+    @cache
+    def resolved(name: str, keep_symbols: bool) -> sympy.Expr | None:
+        """The value of a parameter in terms of the kept symbols (or fully, if not keeping)."""
+        if keep_symbols and name in symbolic:
+            return sympy.Symbol(name)
+        value = values[name]
+        if value is None:
+            return None
+        replacements = {}
+        for symbol in value.free_symbols:
+            inner = resolved(symbol.name, keep_symbols)
+            if inner is None:
+                return None
+            replacements[symbol] = inner
+        return value.xreplace(replacements)
+
+    assumed = {n: resolved(n, True) for n in graph.parameters if n not in symbolic}
+    symbols = tuple(n for n in graph.parameters if n in symbolic and n != unknown)
+    return Parametrisation(
+        unknown=unknown,
+        symbols=symbols,
+        assumed=MappingProxyType(assumed),
+        defaults=MappingProxyType({n: resolved(n, False) for n in symbols}),
+        true_value=resolved(unknown, False) if unknown else None,
+        substitution=MappingProxyType({sympy.Symbol(n): v for n, v in assumed.items()}),
+    )

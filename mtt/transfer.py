@@ -1,0 +1,95 @@
+"""Stage 5: `Equations` -> `TransferFunction`, G(s) = C (sE - A)^-1 B + D, exact and canonical.
+
+Canonical form: numerator and denominator coprime as polynomials in s, the unknown
+and every symbolic parameter; integer coefficients with overall content 1; the
+denominator's coefficient of its highest power of s has a positive leading term.
+The linear solve is fraction-free over the polynomial ring (sympy's DomainMatrix),
+which keeps large models fast.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from math import gcd, lcm
+
+import sympy
+from sympy.polys.domains import QQ, ZZ
+from sympy.polys.rings import PolyElement
+
+from mtt.diagnostics import ModelError, error
+from mtt.equations import Equations
+
+LAPLACE = sympy.Symbol("s")
+
+
+@dataclass(frozen=True)
+class TransferFunction:
+    equations: Equations
+    gens: tuple[sympy.Expr, ...]  # s, then the generators of the coefficient field
+    num: PolyElement  # over ZZ, in `gens`
+    den: PolyElement
+
+    @property
+    def numerator(self) -> sympy.Expr:
+        return self.num.as_expr()
+
+    @property
+    def denominator(self) -> sympy.Expr:
+        return self.den.as_expr()
+
+    def degree(self, which: str) -> int:
+        """The degree in s of 'num' or 'den'."""
+        poly = self.num if which == "num" else self.den
+        return max((m[0] for m in poly.monoms()), default=0)
+
+
+def _field(equations: Equations):
+    """QQ(s, gens...): s adjoined to the coefficient field of the equations."""
+    K = equations.domain
+    gens = (LAPLACE, *getattr(K, "symbols", ()))
+    return QQ.frac_field(*gens), gens
+
+
+def transfer_function(equations: Equations) -> TransferFunction:
+    """G(s) = C (sE - A)^-1 B + D; raise `ModelError` (singular_model) if it does not exist."""
+    F, gens = _field(equations)
+    lift = lambda M: M.convert_to(F)  # noqa: E731
+    s = F.from_sympy(LAPLACE)
+    pencil = lift(equations.E) * s - lift(equations.A) if equations.states else None
+    C, D = lift(equations.C), lift(equations.D)[0, 0].element
+    if pencil is None:
+        G = D
+    else:
+        system = pencil.hstack(lift(equations.B))
+        _, cleared = system.clear_denoms_rowwise(convert=True)
+        size = len(equations.states)
+        M, B = cleared[:, :size], cleared[:, size:]
+        if M.rank() < size:
+            raise ModelError(
+                equations.causal.bondgraph.source,
+                [
+                    error(
+                        "singular_model",
+                        "the equations have no unique solution: det(sE - A) is identically zero",
+                    )
+                ],
+            )
+        xnum, den = M.solve_den(B)
+        R = M.domain
+        x = xnum.convert_to(F)
+        G = sum((C[0, j].element * x[j, 0].element for j in range(size)), F.zero)
+        G = G / F.convert_from(den, R) + D
+    return _canonical(equations, F, gens, G)
+
+
+def _canonical(equations: Equations, F, gens, G) -> TransferFunction:
+    """Coprime, integer, content 1, positive leading term of the highest power of s."""
+    num, den = G.numer, G.denom
+    coefficients = list(num.coeffs()) + list(den.coeffs())
+    scale = lcm(*(QQ.denom(c) for c in coefficients))
+    content = gcd(*(int(QQ.numer(c * scale)) for c in coefficients if c))
+    ring = num.ring.clone(domain=ZZ)
+    num, den = ((p * QQ(scale, content)).set_ring(ring) for p in (num, den))
+    if den.LC < 0:
+        num, den = -num, -den
+    return TransferFunction(equations, gens, num, den)
