@@ -7,13 +7,20 @@ import json
 import os
 import sys
 import traceback
-from collections.abc import Callable
 
-from mtt import __version__
+from mtt import __version__, report
 from mtt.bondgraph import BondGraph, build, summary_counts
+from mtt.causality import assign
+from mtt.causality import describe as describe_causality
+from mtt.components import Role
 from mtt.diagnostics import ModelError
+from mtt.equations import Equations, derive
+from mtt.options import add_parameter_options, choice_from_args
+from mtt.parameters import parametrise
 from mtt.parse import ParsedModel, parse
-from mtt.pipeline import read_source
+from mtt.pipeline import NO_UNKNOWN, load, read_source
+from mtt.theta import theta_matrix
+from mtt.transfer import transfer_function
 
 EXIT_OK, EXIT_MODEL_ERROR, EXIT_BUG = 0, 2, 3
 BUG_REPORT = (
@@ -143,26 +150,55 @@ def describe(graph: BondGraph) -> str:
     return "\n".join(lines)
 
 
-def _with_graph(action: Callable[[BondGraph, argparse.Namespace], int]):
-    """Run `action` on the file's bond graph; model errors print as a compiler prints them."""
-
-    def run(args) -> int:
-        try:
-            source = read_source(args.file)
-            graph = build(parse(source), unknown=getattr(args, "unknown", None))
-        except ModelError as exc:
-            print(exc.render(), file=sys.stderr)
-            return EXIT_MODEL_ERROR
-        for note in graph.warnings:
-            print(graph.source.render(note), file=sys.stderr)
-        return action(graph, args)
-
-    return run
+def _load(args) -> BondGraph:
+    """The file's bond graph; its warnings go to stderr, its errors raise `ModelError`."""
+    graph = load(args.file, unknown=getattr(args, "unknown", None))
+    for note in graph.warnings:
+        print(graph.source.render(note), file=sys.stderr)
+    return graph
 
 
-def _show(graph: BondGraph, args) -> int:
-    print(describe(graph))
+def cmd_show(args) -> int:
+    print(describe(_load(args)))
     return EXIT_OK
+
+
+def cmd_causality(args) -> int:
+    print(describe_causality(assign(_load(args))))
+    return EXIT_OK
+
+
+def _equations(args) -> Equations:
+    graph = _load(args)
+    return derive(assign(graph), parametrise(graph, choice_from_args(args)))
+
+
+def cmd_ss(args) -> int:
+    equations = _equations(args)
+    print(report.ss_latex(equations) if args.latex else report.ss_text(equations))
+    return EXIT_OK
+
+
+def _derived(args, text, latex) -> int:
+    equations = _equations(args)
+    theta = theta_matrix(transfer_function(equations))
+    if args.command == "theta" and theta.unknown is None:
+        raise ModelError(equations.causal.bondgraph.source, [NO_UNKNOWN])
+    if args.json:
+        causal = equations.causal
+        storage = [c for c in causal.bondgraph.components if c.type.role is Role.STORAGE]
+        _print_json(report.derived_json(theta, order=len(storage) - len(causal.dependent)))
+    else:
+        print(latex(theta) if args.latex else text(theta))
+    return EXIT_OK
+
+
+def cmd_tf(args) -> int:
+    return _derived(args, report.tf_text, report.tf_latex)
+
+
+def cmd_theta(args) -> int:
+    return _derived(args, report.theta_text, report.theta_latex)
 
 
 # the parser --------------------------------------------------------------------
@@ -194,7 +230,32 @@ def make_parser() -> argparse.ArgumentParser:
     )
     show.add_argument("file", metavar="FILE")
     show.add_argument("--unknown", metavar="NAME", help="the parameter to identify")
-    show.set_defaults(run=_with_graph(_show))
+    show.set_defaults(run=cmd_show)
+
+    causality = commands.add_parser(
+        "causality",
+        help="show causal strokes, dependent storage and algebraic loops",
+        description="Assign causality (sources first, then integral causality for C and I, "
+        "then free resistors) and print every bond with its causal stroke.",
+    )
+    causality.add_argument("file", metavar="FILE")
+    causality.add_argument("--unknown", metavar="NAME", help="the parameter to identify")
+    causality.set_defaults(run=cmd_causality)
+
+    for name, run, summary in (
+        ("ss", cmd_ss, "print the causal equations and the descriptor state-space form"),
+        ("tf", cmd_tf, "print the exact transfer function, polynomial in the unknown"),
+        ("theta", cmd_theta, "print Theta, the matrix the estimator is built from"),
+    ):
+        command = commands.add_parser(
+            name, help=summary, description=summary[0].upper() + summary[1:] + "."
+        )
+        command.add_argument("file", metavar="FILE")
+        add_parameter_options(command)
+        command.add_argument("--latex", action="store_true", help="print LaTeX")
+        if name != "ss":
+            command.add_argument("--json", action="store_true", help="print one JSON object")
+        command.set_defaults(run=run)
     return parser
 
 
@@ -202,6 +263,9 @@ def main(argv: list[str] | None = None) -> int:
     args = make_parser().parse_args(argv)
     try:
         return args.run(args)
+    except ModelError as exc:
+        print(exc.render(), file=sys.stderr)
+        return EXIT_MODEL_ERROR
     except KeyboardInterrupt:
         print("mtt: interrupted", file=sys.stderr)
         return 130

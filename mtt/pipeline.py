@@ -33,6 +33,11 @@ def load(path: str | Path, unknown: str | None = None) -> BondGraph:
 
 
 DEFAULT_CHOICE = ParameterChoice()
+NO_UNKNOWN = error(
+    "no_unknown",
+    "the model declares no unknown parameter: declare one with 'unknown NAME' or choose one "
+    "with --unknown NAME",
+)
 
 
 def transfer_for(path: str | Path, choice: ParameterChoice = DEFAULT_CHOICE) -> TransferFunction:
@@ -42,5 +47,8 @@ def transfer_for(path: str | Path, choice: ParameterChoice = DEFAULT_CHOICE) -> 
 
 
 def theta_for(path: str | Path, choice: ParameterChoice = DEFAULT_CHOICE) -> Theta:
-    """Text -> ... -> Theta: everything a generated estimator needs."""
-    return theta_matrix(transfer_for(path, choice))
+    """Text -> ... -> Theta: everything a generated estimator needs (so, an unknown)."""
+    theta = theta_matrix(transfer_for(path, choice))
+    if theta.unknown is None:
+        raise ModelError(read_source(path), [NO_UNKNOWN])
+    return theta

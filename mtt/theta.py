@@ -12,7 +12,6 @@ from dataclasses import dataclass
 
 import sympy
 
-from mtt.diagnostics import ModelError, error
 from mtt.transfer import TransferFunction
 
 
@@ -25,7 +24,7 @@ class Theta:
     source_name: str  # the model file as named on the command line
     input: str  # "Se:v"
     output: str  # "Df:vm"
-    unknown: str  # the parameter identified
+    unknown: str | None  # the parameter identified
     symbols: tuple[str, ...]  # parameters kept symbolic, in file order
     defaults: Mapping[str, sympy.Expr | None]  # file values of the kept symbols (or None)
     assumed: Mapping[str, sympy.Expr]  # exact values substituted for the other parameters
@@ -45,27 +44,18 @@ class Theta:
 
 
 def theta_matrix(tf: TransferFunction) -> Theta:
-    """Theta from the canonical transfer function; raise `ModelError` if there is no unknown."""
+    """Theta from the canonical transfer function (one column, N = 0, without an unknown)."""
     equations = tf.equations
     graph = equations.causal.bondgraph
     params = equations.parametrisation
-    if params.unknown is None:
-        raise ModelError(
-            graph.source,
-            [
-                error(
-                    "no_unknown",
-                    "the model declares no unknown parameter: add an 'unknown' "
-                    "declaration or choose one with --unknown NAME",
-                )
-            ],
-        )
     n, m = tf.degree("den"), tf.degree("num")
     rows: list[dict[int, sympy.Expr]] = [{} for _ in range(n + m + 2)]
-    rest = tf.gens[2:]  # s and the unknown come first
+    skip = 2 if params.unknown else 1  # s and the unknown come first
+    rest = tf.gens[skip:]
     for offset, poly, sign in ((0, tf.den, 1), (n + 1, tf.num, -1)):
         for monom, coefficient in poly.terms():
-            power_s, power_k, *others = monom
+            power_s, power_k = monom[0], monom[1] if params.unknown else 0
+            others = monom[skip:]
             term = (
                 sign
                 * sympy.Integer(int(coefficient))

@@ -1,0 +1,136 @@
+"""How the derived representations read: as text for people, JSON for tools, LaTeX for papers."""
+
+from __future__ import annotations
+
+import sympy
+
+from mtt.equations import Equations
+from mtt.theta import Theta
+from mtt.transfer import LAPLACE
+
+
+def in_powers_of_s(expression: sympy.Expr) -> str:
+    """A polynomial in s written highest power first, each coefficient factored."""
+    poly = sympy.Poly(expression, LAPLACE)
+    terms = []
+    for (power,), coefficient in poly.terms():
+        c = sympy.factor(coefficient)
+        monomial = {0: "", 1: "s"}.get(power, f"s**{power}")
+        if not monomial:
+            terms.append(str(c))
+        elif c == 1:
+            terms.append(monomial)
+        elif c == -1:
+            terms.append(f"-{monomial}")
+        else:
+            text = f"({c})" if isinstance(c, sympy.Add) else str(c)
+            terms.append(f"{text}*{monomial}")
+    return " + ".join(terms).replace("+ -", "- ") or "0"
+
+
+def _heading(theta: Theta) -> str:
+    symbols = ", ".join(theta.symbols) or "none"
+    unknown = theta.unknown or "none"
+    return (
+        f"model {theta.model}: from {theta.input} to {theta.output}; unknown {unknown}; "
+        f"symbolic {symbols}"
+    )
+
+
+def _assumed(theta: Theta) -> str:
+    if not theta.assumed:
+        return ""
+    values = ", ".join(f"{name} = {value}" for name, value in theta.assumed.items())
+    return f"values substituted: {values}"
+
+
+def tf_text(theta: Theta) -> str:
+    lines = [_heading(theta)]
+    if theta.assumed:
+        lines.append(_assumed(theta))
+    lines += [
+        "",
+        f"  numerator   (m = {theta.m}):  {in_powers_of_s(theta.num)}",
+        f"  denominator (n = {theta.n}):  {in_powers_of_s(theta.den)}",
+        "",
+        f"  G(s) = {sympy.factor(theta.num)} / ({sympy.factor(theta.den)})",
+    ]
+    return "\n".join(lines)
+
+
+def tf_latex(theta: Theta) -> str:
+    num, den = (sympy.collect(sympy.expand(p), LAPLACE) for p in (theta.num, theta.den))
+    return f"G(s) = \\frac{{{sympy.latex(num)}}}{{{sympy.latex(den)}}}"
+
+
+def _column_labels(theta: Theta) -> list[str]:
+    k = theta.unknown or "1"
+    return ["1", k] + [f"{k}^{j}" for j in range(2, theta.N + 1)] if theta.N else ["1"]
+
+
+def theta_text(theta: Theta) -> str:
+    labels = _column_labels(theta)
+    cells = [[str(entry) for entry in theta.matrix.row(i)] for i in range(theta.matrix.rows)]
+    rows = [["", *labels]] + [
+        [label, *row] for label, row in zip(theta.row_labels, cells, strict=True)
+    ]
+    widths = [max(len(r[j]) for r in rows) for j in range(len(rows[0]))]
+    table = ["  " + "  ".join(c.rjust(w) for c, w in zip(r, widths, strict=True)) for r in rows]
+    lines = [_heading(theta)]
+    if theta.assumed:
+        lines.append(_assumed(theta))
+    lines += [
+        f"Theta: n = {theta.n}, m = {theta.m}, N = {theta.N}; rows "
+        f"{theta.row_labels[0]}..{theta.row_labels[theta.n]}, "
+        f"{'..'.join(dict.fromkeys((theta.row_labels[theta.n + 1], theta.row_labels[-1])))}; "
+        f"columns {', '.join(labels)}",
+        "",
+        *table,
+    ]
+    return "\n".join(lines)
+
+
+def theta_latex(theta: Theta) -> str:
+    return f"\\Theta = {sympy.latex(theta.matrix)}"
+
+
+def derived_json(theta: Theta, order: int) -> dict:
+    """The `tf --json` / `theta --json` record (its shape is a public contract)."""
+    return {
+        "model": theta.model,
+        "input": theta.input,
+        "output": theta.output,
+        "unknown": theta.unknown,
+        "symbols": list(theta.symbols),
+        "num": str(theta.num),
+        "den": str(theta.den),
+        "n": theta.n,
+        "m": theta.m,
+        "N": theta.N,
+        "theta": [[str(e) for e in theta.matrix.row(i)] for i in range(theta.matrix.rows)],
+        "order": order,
+    }
+
+
+def ss_text(equations: Equations) -> str:
+    graph = equations.causal.bondgraph
+    lines = [
+        f"model {graph.name}: causal equations (bond variables e<n>, f<n>; "
+        "u input, y output; d<x> is dx/dt)"
+    ]
+    lines += [f"  {name} = {expression}" for name, expression in equations.relations]
+    lines += [
+        "",
+        "descriptor form E x' = A x + B u, y = C x + D u",
+        f"  x = [{', '.join(equations.states)}]",
+    ]
+    for name, matrix in equations.matrices().items():
+        lines += ["", f"{name} ="]
+        lines += ["  " + line for line in sympy.pretty(matrix, use_unicode=False).splitlines()]
+    return "\n".join(lines)
+
+
+def ss_latex(equations: Equations) -> str:
+    return "\n".join(
+        f"{name} = {sympy.latex(matrix)}" for name, matrix in equations.matrices().items()
+    )
