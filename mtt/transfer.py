@@ -10,10 +10,10 @@ which keeps large models fast.
 from __future__ import annotations
 
 from dataclasses import dataclass
-from math import gcd, lcm
+from math import gcd
 
 import sympy
-from sympy.polys.domains import QQ, ZZ
+from sympy.polys.domains import ZZ
 from sympy.polys.rings import PolyElement
 
 from mtt.diagnostics import ModelError, error
@@ -44,10 +44,12 @@ class TransferFunction:
 
 
 def _field(equations: Equations):
-    """QQ(s, gens...): s adjoined to the coefficient field of the equations."""
-    K = equations.domain
-    gens = (LAPLACE, *getattr(K, "symbols", ()))
-    return QQ.frac_field(*gens), gens
+    """s adjoined to the coefficient field of the equations, as fractions over ZZ.
+
+    Over ZZ the fraction-free solve below runs several times faster than over QQ.
+    """
+    gens = (LAPLACE, *getattr(equations.domain, "symbols", ()))
+    return ZZ.frac_field(*gens), gens
 
 
 def transfer_function(equations: Equations) -> TransferFunction:
@@ -84,12 +86,9 @@ def transfer_function(equations: Equations) -> TransferFunction:
 
 def _canonical(equations: Equations, F, gens, G) -> TransferFunction:
     """Coprime, integer, content 1, positive leading term of the highest power of s."""
-    num, den = G.numer, G.denom
-    coefficients = list(num.coeffs()) + list(den.coeffs())
-    scale = lcm(*(QQ.denom(c) for c in coefficients))
-    content = gcd(*(int(QQ.numer(c * scale)) for c in coefficients if c))
-    ring = num.ring.clone(domain=ZZ)
-    num, den = ((p * QQ(scale, content)).set_ring(ring) for p in (num, den))
+    num, den = G.numer, G.denom  # coprime, over ZZ
+    content = gcd(*(int(c) for c in (*num.coeffs(), *den.coeffs()) if c))
+    num, den = num.quo_ground(content), den.quo_ground(content)
     if den.LC < 0:
         num, den = -num, -den
     return TransferFunction(equations, gens, num, den)
