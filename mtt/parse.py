@@ -144,6 +144,7 @@ def _describe_terminal(name: str, parser: lark.Lark) -> str:
         "NUMBER": "a number",
         "STRING": 'a "description"',
         "COMPONENT": "a component TYPE:NAME",
+        "POW": "'^'",
         "_NL": "end of line",
         "$END": "end of file",
     }
