@@ -133,9 +133,11 @@ class _Checker:
 
     def check_components(self) -> None:
         declared: dict[str, Position] = {}
+        repeated: set[Position] = set()
         for decl in self.parsed.declarations:
             name = decl.use.name
             if name in declared:
+                repeated.add(decl.use.position)
                 self.report(
                     "duplicate_name",
                     f"component {name!r} is already declared on line {declared[name].line}",
@@ -156,12 +158,13 @@ class _Checker:
                 continue
             seen = self.components.get(use.name)
             if seen is not None and seen.type is not kind:
-                self.report(
-                    "duplicate_name",
-                    f"{use.label} names the component {seen.label} "
-                    f"of line {seen.position.line} with another type",
-                    use.position,
-                )
+                if use.position not in repeated:  # not reported twice
+                    self.report(
+                        "duplicate_name",
+                        f"{use.label} names the component {seen.label} "
+                        f"of line {seen.position.line} with another type",
+                        use.position,
+                    )
                 continue
             if use.argument is not None:
                 self._check_argument(use, kind, argument_at)
@@ -360,8 +363,14 @@ def build(parsed: ParsedModel, unknown: str | None = None) -> BondGraph:
             argument=component.argument,
             position=component.position,
         )
+
+    def valid(use: ComponentUse) -> bool:
+        """A mention of a component that exists with this type (else it was reported)."""
+        component = checker.components.get(use.name)
+        return component is not None and component.type.name == use.type
+
     for number, bond in enumerate(parsed.bonds, start=1):
-        if bond.tail.name in checker.components and bond.head.name in checker.components:
+        if valid(bond.tail) and valid(bond.head):
             graph.add_edge(
                 bond.tail.name,
                 bond.head.name,
