@@ -93,6 +93,10 @@ class BondGraph:
         return next(b for b in self.bonds if b.number == number)
 
 
+def _article(noun: str) -> str:
+    return "an" if noun[0] in "aeiou" else "a"
+
+
 def _implied_argument(use: ComponentUse) -> Expression:
     """`R:ra` means `R:ra(ra)`."""
     return Expression(sympy.Symbol(use.name), (NameUse(use.name, use.position),), use.position)
@@ -190,7 +194,9 @@ class _Checker:
     def _check_argument(self, use: ComponentUse, kind: ComponentType, seen: dict) -> None:
         if not kind.takes_argument:
             self.report(
-                "bad_argument", f"a {kind.summary} takes no argument", use.argument.position
+                "bad_argument",
+                f"{use.label} takes no argument: it is {_article(kind.summary)} {kind.summary}",
+                use.argument.position,
             )
         elif use.name in seen:
             self.report(
