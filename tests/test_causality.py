@@ -1,0 +1,180 @@
+"""Sequential causality assignment: strokes, dependent storage, algebraic loops, conflicts."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+
+from mtt.causality import CausalBondGraph, assign, describe
+from mtt.diagnostics import ModelError, Source
+from mtt.pipeline import load
+
+ROOT = Path(__file__).resolve().parent.parent
+SYSTEMS = Path(__file__).resolve().parent / "data" / "systems"
+ALL_MODELS = sorted(SYSTEMS.glob("*.bg")) + sorted((ROOT / "models").glob("*.bg"))
+
+
+def causal(path: Path) -> CausalBondGraph:
+    return assign(load(path))
+
+
+def conflict(models, text: str) -> ModelError:
+    with pytest.raises(ModelError) as caught:
+        assign(models.build(text))
+    return caught.value
+
+
+def check_rules(c: CausalBondGraph) -> None:
+    """Every bond has a causality and every component's causal constraint holds."""
+    graph = c.bondgraph
+    assert set(c.effort_from) == {b.number for b in graph.bonds}
+    for component in graph.components:
+        name, kind = component.name, component.type.name
+        imposes = [c.imposes_effort(name, p.bond) for p in graph.ports(name)]
+        if kind in ("Se", "Df"):
+            assert imposes == [True]
+        elif kind in ("Sf", "De"):
+            assert imposes == [False]
+        elif kind == "C":
+            assert imposes == [name not in c.dependent]
+        elif kind == "I":
+            assert imposes == [name in c.dependent]
+        elif kind == "TF":
+            assert imposes[0] != imposes[1]
+        elif kind == "GY":
+            assert imposes[0] == imposes[1]
+        elif kind == "0":  # exactly one bond brings the effort in
+            assert imposes.count(False) == 1
+        elif kind == "1":  # exactly one bond brings the flow in
+            assert imposes.count(True) == 1
+
+
+@pytest.mark.parametrize("path", ALL_MODELS, ids=lambda p: p.stem)
+def test_every_model_gets_a_complete_consistent_causality(path):
+    check_rules(causal(path))
+
+
+def test_rlc_strokes():
+    c = causal(ROOT / "models" / "rlc.bg")
+    # I:l (integral) imposes the loop's flow; so every other bond brings its effort into
+    # the loop: Se and Df by their fixed causality, C (integral) and R (resistance form)
+    assert [c.stroke_at(b) for b in range(1, 6)] == ["loop", "loop", "l", "loop", "loop"]
+    assert dict(c.effort_from) == {1: "v", 2: "r", 3: "loop", 4: "c", 5: "i"}
+    assert c.dependent == () and c.loops == ()
+
+
+def test_rlc_describe_lists_strokes():
+    text = describe(causal(ROOT / "models" / "rlc.bg"))
+    assert text.splitlines() == [
+        "causality of rlc (| marks the end of a bond that receives the effort)",
+        "    1  Se:v ->| 1:loop",
+        "    2  1:loop |-> R:r",
+        "    3  1:loop ->| I:l",
+        "    4  1:loop |-> C:c",
+        "    5  1:loop |-> Df:i",
+        "dependent storage (derivative causality): none",
+        "algebraic loops (resistors with an arbitrary causality): none",
+    ]
+
+
+def test_paper_models_are_all_integral_without_loops():
+    for name in ("dc_drive", "absorber"):
+        c = causal(ROOT / "models" / f"{name}.bg")
+        assert c.dependent == () and c.loops == ()
+
+
+@pytest.mark.parametrize(
+    "name, dependent",
+    [
+        ("parallel_caps", ("c2",)),  # the second capacitor meets a fixed effort
+        ("source_on_capacitor", ("c",)),  # Se fixes the capacitor's effort
+        ("current_into_inductor", ("l",)),  # Sf fixes the inductor's flow
+        ("gear", ("j2",)),  # the gear fixes the second inertia's speed
+    ],
+)
+def test_derivative_causality(name, dependent):
+    c = causal(SYSTEMS / f"{name}.bg")
+    assert c.dependent == dependent
+    assert all(not c.integral(x) for x in dependent)
+    labels = ", ".join(c.bondgraph.component(x).label for x in dependent)
+    assert f"dependent storage (derivative causality): {labels}" in describe(c)
+
+
+def test_algebraic_loop():
+    c = causal(SYSTEMS / "resistor_network.bg")
+    assert c.loops == ("r1",)
+    assert c.dependent == ()
+    assert "algebraic loops (resistors with an arbitrary causality): R:r1" in describe(c)
+
+
+def test_arbitrary_resistor_gets_resistance_causality():
+    # the free choice is the preferred one: R:r1 takes the flow and imposes the effort
+    c = causal(SYSTEMS / "resistor_network.bg")
+    assert c.imposes_effort("r1", 2)
+
+
+def test_storage_order_decides_which_is_dependent(models):
+    text = "model p\nparam a = 1\nparam b = 2\nSf:i -> 0:n\n0:n -> C:{}\n0:n -> C:{}\n0:n -> De:v\n"
+    assert assign(models.build(text.format("a", "b"))).dependent == ("b",)
+    assert assign(models.build(text.format("b", "a"))).dependent == ("a",)
+
+
+def test_two_effort_sources_on_a_zero_junction(models):
+    problem = conflict(
+        models,
+        "model two\ninput Se:a\nSe:a -> 0:n\nSe:b -> 0:n\n0:n -> R:r\nparam r = 1\n0:n -> De:v\n",
+    )
+    (error,) = problem.errors
+    assert error.kind == "causal_conflict"
+    assert "Se:a" in error.message and "Se:b" in error.message
+    assert error.position.line in (3, 4)  # one of the two sources
+
+
+def test_two_flow_sources_on_a_one_junction(models):
+    problem = conflict(
+        models,
+        "model two\ninput Sf:a\nSf:a -> 1:n\nSf:b -> 1:n\n1:n -> R:r\nparam r = 1\n1:n -> Df:i\n",
+    )
+    (error,) = problem.errors
+    assert error.kind == "causal_conflict"
+    assert "Sf:a" in error.message and "Sf:b" in error.message
+
+
+def test_effort_source_and_flow_detector_on_a_zero_junction(models):
+    # Df imposes e = 0 where Se imposes e = u
+    problem = conflict(models, "model d\nSe:v -> 0:n\n0:n -> Df:i\n0:n -> R:r(1)\n")
+    (error,) = problem.errors
+    assert error.kind == "causal_conflict"
+    assert "Se:v" in error.message and "Df:i" in error.message
+    assert error.position.line in (2, 3)
+
+
+def test_flow_source_and_effort_detector_on_a_one_junction(models):
+    problem = conflict(models, "model d\nSf:i -> 1:n\n1:n -> De:v\n1:n -> R:r(1)\n")
+    assert problem.kinds() == ["causal_conflict"]
+    assert "Sf:i" in problem.errors[0].message and "De:v" in problem.errors[0].message
+
+
+def test_conflict_through_a_transformer(models):
+    # Sf:a fixes the flow on the TF's first port, so the TF fixes its second port's flow,
+    # the flow of 1:j, which Sf:b also fixes
+    problem = conflict(
+        models,
+        "model t\ninput Sf:a\nSf:a -> TF:t(2) -> 1:j\nSf:b -> 1:j\n1:j -> R:r(1)\n1:j -> Df:i\n",
+    )
+    assert problem.kinds() == ["causal_conflict"]
+    assert "Sf:a" in problem.errors[0].message and "Sf:b" in problem.errors[0].message
+
+
+def test_conflict_is_rendered_with_its_line(models):
+    problem = conflict(models, "model d\nSe:v -> 0:n\n0:n -> Df:i\n0:n -> R:r(1)\n")
+    text = Source("test.bg", "").render(problem.errors[0])
+    assert text.startswith("test.bg:") and "error[causal_conflict]" in text
+
+
+def test_unused_sources_keep_their_fixed_causality():
+    c = causal(SYSTEMS / "several_ports.bg")
+    check_rules(c)
+    assert c.imposes_effort("bias", 2)  # Se:bias (set to zero) still imposes effort
+    assert not c.imposes_effort("leak", 6)  # Sf:leak still imposes flow
