@@ -1,0 +1,175 @@
+"""Theta, the paper's matrix: eqs. (24)-(27) of method.md exactly, and its general rules."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from types import MappingProxyType
+
+import pytest
+import sympy
+
+from mtt.diagnostics import ModelError
+from mtt.options import ParameterChoice
+from mtt.pipeline import theta_for, transfer_for
+from mtt.report import derived_json
+
+ROOT = Path(__file__).resolve().parent.parent
+MODELS = ROOT / "models"
+SYSTEMS = Path(__file__).resolve().parent / "data" / "systems"
+
+s, k, tau, l_ = sympy.symbols("s k tau l")
+
+
+def expanded_equal(a, b) -> bool:
+    return sympy.expand(a - b) == 0
+
+
+# --- 5.1 DC drive ------------------------------------------------------------------------
+
+
+def test_dc_drive_transfer_function_eq_24():
+    # G(s) = 10 (k s^2 + 1) / ((s^3 + 10 s^2 + 11 s + 10) k s + s^2 + 10 s + 10)
+    tf = transfer_for(MODELS / "dc_drive.bg")
+    assert expanded_equal(tf.numerator, 10 * (k * s**2 + 1))
+    assert expanded_equal(
+        tf.denominator, (s**3 + 10 * s**2 + 11 * s + 10) * k * s + s**2 + 10 * s + 10
+    )
+
+
+def test_dc_drive_theta_eq_25():
+    theta = theta_for(MODELS / "dc_drive.bg")
+    assert (theta.n, theta.m, theta.N) == (4, 2, 1)
+    assert theta.matrix == sympy.Matrix(
+        [[10, 0], [10, 10], [1, 11], [0, 10], [0, 1], [-10, 0], [0, 0], [0, -10]]
+    )
+    assert theta.row_labels == ("a0", "a1", "a2", "a3", "a4", "-b0", "-b1", "-b2")
+    assert theta.unknown == "k" and theta.symbols == ()
+    assert theta.input == "Se:v" and theta.output == "Df:vm"
+    assert theta.true_value == 10
+
+
+# --- 5.2 absorber -------------------------------------------------------------------------
+
+ABSORBER_DEN = l_ * ((k + s * tau + 1) * (3 * s * tau + 1) * k + (s * tau + 1) ** 3 + k**3)
+
+
+def test_absorber_transfer_function_eq_26():
+    # G(s) = k^3 / (l [(k + s tau + 1)(3 s tau + 1) k + (s tau + 1)^3 + k^3])
+    tf = transfer_for(MODELS / "absorber.bg", ParameterChoice(keep=frozenset({"tau", "l"})))
+    assert expanded_equal(tf.numerator, k**3)
+    assert expanded_equal(tf.denominator, ABSORBER_DEN)
+
+
+def test_absorber_transfer_function_with_defaults():
+    # tau = 2, l = 1/2: k^3 / ((1/2) [...]) = 2 k^3 / [...]
+    tf = transfer_for(MODELS / "absorber.bg")
+    assert expanded_equal(tf.numerator, 2 * k**3)
+    assert expanded_equal(tf.denominator, 2 * ABSORBER_DEN.subs({tau: 2, l_: sympy.Rational(1, 2)}))
+
+
+def test_absorber_theta_eq_27():
+    theta = theta_for(MODELS / "absorber.bg", ParameterChoice(keep=frozenset({"tau", "l"})))
+    assert (theta.n, theta.m, theta.N) == (3, 0, 3)
+    expected = sympy.Matrix(
+        [
+            [l_, l_, l_, l_],
+            [3 * l_ * tau, 4 * l_ * tau, 3 * l_ * tau, 0],
+            [3 * l_ * tau**2, 3 * l_ * tau**2, 0, 0],
+            [l_ * tau**3, 0, 0, 0],
+            [0, 0, 0, -1],
+        ]
+    )
+    assert (theta.matrix - expected).expand() == sympy.zeros(5, 4)
+    assert theta.symbols == ("tau", "l")
+    assert theta.defaults == {"tau": 2, "l": sympy.Rational(1, 2)}
+
+
+def test_absorber_theta_with_defaults():
+    # eq. (27) at tau = 2, l = 1/2, times 2 (the canonical form has content 1)
+    theta = theta_for(MODELS / "absorber.bg")
+    assert theta.matrix == sympy.Matrix(
+        [[1, 1, 1, 1], [6, 8, 6, 0], [12, 12, 0, 0], [8, 0, 0, 0], [0, 0, 0, -2]]
+    )
+    assert theta.true_value == sympy.Rational(72, 100)
+    assert dict(theta.assumed) == {"tau": 2, "l": sympy.Rational(1, 2)}
+
+
+# --- general rules -----------------------------------------------------------------------
+
+
+def reconstruct(theta):
+    """theta(k) = Theta K(k); its rows are a0..an, -b0..-bm."""
+    unknown = sympy.Symbol(theta.unknown)
+    K = sympy.Matrix([unknown**j for j in range(theta.N + 1)])
+    column = theta.matrix * K
+    den = sum(column[i] * s**i for i in range(theta.n + 1))
+    num = -sum(column[theta.n + 1 + i] * s**i for i in range(theta.m + 1))
+    return num, den
+
+
+@pytest.mark.parametrize(
+    "path",
+    sorted(MODELS.glob("*.bg")) + [SYSTEMS / "two_tanks.bg", SYSTEMS / "dc_motor.bg"],
+    ids=lambda p: p.stem,
+)
+@pytest.mark.parametrize("symbolic", [False, True])
+def test_theta_reproduces_the_transfer_function(path, symbolic):
+    theta = theta_for(path, ParameterChoice(symbolic=symbolic))
+    num, den = reconstruct(theta)
+    assert expanded_equal(num, theta.num) and expanded_equal(den, theta.den)
+    rows, cols = theta.matrix.shape
+    assert (rows, cols) == (theta.n + theta.m + 2, theta.N + 1)
+    assert any(entry != 0 for entry in theta.matrix.col(theta.N))  # N is the true degree
+
+
+def test_theta_of_spec_rlc_symbolic():
+    # c s / (c l s^2 + c r s + 1): a0 = 1, a1 = r c, a2 = l c, -b0 = 0, -b1 = -c
+    r, ll = sympy.symbols("r l")
+    theta = theta_for(MODELS / "rlc.bg", ParameterChoice(symbolic=True))
+    assert theta.matrix == sympy.Matrix([[1, 0], [0, r], [0, ll], [0, 0], [0, -1]])
+    assert theta.symbols == ("r", "l")
+
+
+def test_theta_with_another_unknown():
+    # rlc with unknown r: 2 s / (s^2 + 2 r s + 20) (c = 1/10, l = 1/2)
+    theta = theta_for(MODELS / "rlc.bg", ParameterChoice(unknown="r"))
+    assert theta.unknown == "r"
+    assert theta.matrix == sympy.Matrix([[20, 0], [0, 2], [1, 0], [0, 0], [-2, 0]])
+
+
+def test_theta_of_an_improper_system():
+    # G = c s: n = 0, m = 1; rows a0, -b0, -b1
+    theta = theta_for(SYSTEMS / "source_on_capacitor.bg")
+    assert (theta.n, theta.m, theta.N) == (0, 1, 1)
+    assert theta.matrix == sympy.Matrix([[1, 0], [0, 0], [0, -1]])
+
+
+def test_no_unknown(tmp_path):
+    path = tmp_path / "known.bg"
+    path.write_text((MODELS / "rlc.bg").read_text().replace("unknown c", "param c"))
+    with pytest.raises(ModelError) as caught:
+        theta_for(path)
+    assert caught.value.kinds() == ["no_unknown"]
+    assert transfer_for(path).degree("den") == 2  # the transfer function still exists
+
+
+def test_json_record_shape():
+    theta = theta_for(MODELS / "dc_drive.bg")
+    record = derived_json(theta, order=4)
+    assert list(record) == [
+        "model", "input", "output", "unknown", "symbols", "num", "den",
+        "n", "m", "N", "theta", "order",
+    ]  # fmt: skip
+    assert record["theta"][0] == ["10", "0"]
+    assert record["num"] == "10*k*s**2 + 10"
+    assert sympy.sympify(record["den"]) == sympy.expand(theta.den)
+
+
+def test_theta_for_a_symbol_without_value(tmp_path):
+    # rc_lowpass with r declared without a value: r stays symbolic, c unknown
+    path = tmp_path / "rc.bg"
+    path.write_text((SYSTEMS / "rc_lowpass.bg").read_text().replace("param r = 2", "param r"))
+    theta = theta_for(path, ParameterChoice(overrides=MappingProxyType({})))
+    r = sympy.Symbol("r")
+    assert theta.symbols == ("r",) and theta.defaults == {"r": None}
+    assert theta.matrix == sympy.Matrix([[1, 0], [0, r], [-1, 0]])
