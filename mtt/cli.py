@@ -63,8 +63,7 @@ def _summary(
         record["components"] = graph.graph.number_of_nodes()
         record["input"] = graph.component(graph.input).label
         record["output"] = graph.component(graph.output).label
-        if graph.unknown and graph.unknown not in record["unknown"]:
-            record["unknown"] = [graph.unknown]
+        record["unknown"] = [graph.unknown] if graph.unknown else []
     return record
 
 

@@ -37,6 +37,9 @@ RESERVED = frozenset({LAPLACE, *FUNCTIONS, *CONSTANTS})
 # 4300 digits CPython converts between int and str by default (sys.int_info), so
 # every accepted value can still be printed.
 MAX_DIGITS = 4000
+# Roots and transcendental functions of a number make sympy look for perfect powers
+# and factors: quick for numbers of everyday size, minutes for thousands of digits.
+MAX_ROOT_DIGITS = 100
 MAX_SYNTAX_ERRORS = 50
 
 
@@ -262,6 +265,9 @@ class _ToModel(Transformer):
                 error("syntax", f"unknown function {str(token)!r} (known: {known})", _at(token))
             )
             return argument
+        if _digits(argument.value) > MAX_ROOT_DIGITS:
+            self.problems.append(error("syntax", f"argument of {token} out of range", _at(token)))
+            return argument
         return self._result(function(argument.value), argument.names, _at(token))
 
     add = _binary(lambda a, b: a + b)
@@ -285,6 +291,7 @@ class _ToModel(Transformer):
         if isinstance(x, sympy.Number):
             size = _digits(b) if isinstance(b, sympy.Number) else max(_digits(b), 1)
             too_big = abs(x) * size > MAX_DIGITS or (b == 0 and x < 0)
+            too_big |= not x.is_Integer and _digits(b) > MAX_ROOT_DIGITS
         else:
             too_big = False
         if too_big:

@@ -16,10 +16,11 @@ from mtt.transfer import TransferFunction, transfer_function
 
 
 def read_source(path: str | Path) -> Source:
-    """A model file's text; unreadable files are model errors too (kind `io`)."""
+    """A model file's text (a UTF-8 byte order mark is dropped); unreadable files are model
+    errors too (kind `io`)."""
     name = str(path)
     try:
-        return Source(name, Path(path).read_text(encoding="utf-8"))
+        return Source(name, Path(path).read_text(encoding="utf-8-sig"))
     except (OSError, UnicodeDecodeError) as exc:
         reason = exc.strerror if isinstance(exc, OSError) and exc.strerror else str(exc)
         raise ModelError(

@@ -262,9 +262,18 @@ def test_check_unknown_option(capsys):
     several = str(DATA / "errors" / "several_unknowns.bg")
     assert main(["check", "--unknown", "c", several]) == 0
     assert capsys.readouterr().out.strip().endswith(", unknown c")
+    assert main(["check", "--json", "--unknown", "c", several]) == 0
+    assert json.loads(capsys.readouterr().out)["unknown"] == ["c"]
     assert main(["check", "--json", "--unknown", "nope", several]) == 2
     record = json.loads(capsys.readouterr().out)
     assert [(e["kind"], e["line"]) for e in record["errors"]] == [("undeclared_parameter", None)]
+
+
+def test_a_utf8_byte_order_mark_is_ignored(tmp_path, capsys):
+    model = tmp_path / "bom.bg"
+    model.write_bytes(b"\xef\xbb\xbfmodel m\nunknown a = 1\nSe:v -> 1:j -> R:a\n1:j -> Df:i\n")
+    assert main(["check", str(model)]) == 0
+    assert "ok: model m" in capsys.readouterr().out
 
 
 def test_check_text_output_renders_source_and_caret(capsys):
