@@ -8,7 +8,7 @@ import os
 import sys
 import traceback
 
-from mtt import __version__, report
+from mtt import __version__, experiment, report
 from mtt.bondgraph import BondGraph, build, summary_counts
 from mtt.causality import assign
 from mtt.causality import describe as describe_causality
@@ -230,6 +230,7 @@ def make_parser() -> argparse.ArgumentParser:
     show.add_argument("file", metavar="FILE")
     show.add_argument("--unknown", metavar="NAME", help="the parameter to identify")
     show.set_defaults(run=cmd_show)
+    experiment.register(commands)
 
     causality = commands.add_parser(
         "causality",

@@ -1,0 +1,244 @@
+"""Stage 7: Theta -> a standalone Python module that identifies the unknown parameter.
+
+The algorithm lives in `templates/estimator_algorithm.py.j2`, the same for every system;
+`templates/estimator.py.j2` adds what is particular to one system (Theta as a function of
+the known parameters kept symbolic, n, m, N, names and a header docstring). Everything
+taken from the model reaches the generated code as a validated identifier, as a string
+through `repr`, or as a number printed here from its exact value: so the generated text
+is safe to run, and the same Theta always gives the same bytes.
+"""
+
+from __future__ import annotations
+
+import keyword
+import os
+import re
+import sys
+import tempfile
+import textwrap
+import types
+from functools import cache
+from pathlib import Path
+
+import jinja2
+import sympy
+
+from mtt import __version__
+from mtt.diagnostics import ModelError, Source, error
+from mtt.resources import resource_dir
+from mtt.theta import Theta
+
+# Keyword names of the generated functions: a kept parameter, passed as a keyword
+# argument (`estimate(..., tau=2)`), must not take one of them.
+RESERVED = frozenset(
+    {"t", "u", "y", "k", "k0", "beta", "S0", "C", "hold", "method", "rtol", "atol"}
+    | {"max_step", "progress", "known"}
+)
+# Characters that sympy's printing of an exact number may use; text made only of them
+# cannot end a docstring or a string literal.
+_PLAIN = re.compile(r"[\w .*/+\-()]+")
+
+
+def _fail(theta: Theta, kind: str, message: str) -> ModelError:
+    return ModelError(Source(theta.source_name, ""), [error(kind, message)])
+
+
+def _check(theta: Theta) -> None:
+    """Reject what the generated module could not carry safely or use meaningfully."""
+    for role, name in (("model name", theta.model), ("unknown", theta.unknown)):
+        if not (isinstance(name, str) and name.isidentifier() and not keyword.iskeyword(name)):
+            raise _fail(theta, "bad_name", f"the {role} {name!r} is not a Python identifier")
+    for name in theta.symbols:
+        if not name.isidentifier() or keyword.iskeyword(name):
+            raise _fail(theta, "bad_name", f"the parameter {name!r} is not a Python identifier")
+        if name in RESERVED:
+            raise _fail(
+                theta,
+                "reserved_name",
+                f"the parameter {name!r} cannot be kept symbolic: the estimator's functions "
+                "take an argument of that name; substitute its value (drop it from --keep) "
+                "or rename it in the model",
+            )
+    if theta.N < 1:
+        raise _fail(
+            theta,
+            "no_dependence",
+            f"the transfer function does not depend on {theta.unknown}: there is nothing "
+            "to identify",
+        )
+
+
+def _number(value: sympy.Expr) -> str:
+    """Python text for an exact real number: integers and fractions exact, others as floats."""
+    if value.is_Integer:
+        return str(int(value))
+    if value.is_Rational:
+        return f"{int(value.p)} / {int(value.q)}"
+    return repr(_float(value))
+
+
+def _float(value: sympy.Expr) -> float:
+    number = sympy.N(value, 30)
+    if not (number.is_real and number.is_finite):
+        raise ValueError(f"not a finite real number: {value}")
+    return float(number)
+
+
+def _doc_text(text: str) -> str:
+    """Text for the docstring: as it is when plain (names, numbers, operators), else repr'd."""
+    return text if _PLAIN.fullmatch(text) else _docstring_safe(text)
+
+
+def _wrapped(label: str, polynomial: sympy.Expr) -> str:
+    """`label = polynomial` for the docstring, wrapped between terms."""
+    lines = textwrap.wrap(
+        f"{label} = {_doc_text(str(polynomial))}",
+        width=84,
+        subsequent_indent=" " * (len(label) + 3),
+        break_on_hyphens=False,
+    )
+    return "\n        ".join(lines)
+
+
+def _entry(theta: Theta, expr: sympy.Expr, symbols: list[sympy.Symbol]) -> str:
+    """Python text for one entry of Theta, each kept parameter read as p['name']."""
+    if not symbols:
+        return _number(expr)
+    try:
+        poly = sympy.Poly(expr, *symbols)
+    except sympy.PolynomialError:
+        raise _fail(
+            theta,
+            "unsupported_theta",
+            f"the Theta entry {expr} is not a polynomial in the kept parameters; "
+            "substitute their values instead (drop them from --keep)",
+        ) from None
+    terms = []
+    for monomial, coefficient in poly.terms():
+        factors = [
+            f"p[{symbol.name!r}]" + (f" ** {power}" if power > 1 else "")
+            for symbol, power in zip(symbols, monomial, strict=True)
+            if power
+        ]
+        if not factors:
+            terms.append(_number(coefficient))
+        elif abs(coefficient) == 1:
+            terms.append(("-" if coefficient < 0 else "") + " * ".join(factors))
+        else:
+            terms.append(" * ".join([_number(coefficient), *factors]))
+    if not terms:
+        return "0"
+    text = terms[0]
+    for term in terms[1:]:
+        text += f" - {term[1:]}" if term.startswith("-") else f" + {term}"
+    return text
+
+
+def _docstring_safe(value: object) -> str:
+    """repr(value) with its double quotes escaped, so that it can sit in a docstring."""
+    return repr(value).replace('"', '\\"')
+
+
+@cache
+def _environment() -> jinja2.Environment:
+    environment = jinja2.Environment(
+        loader=jinja2.FileSystemLoader(resource_dir("templates")),
+        undefined=jinja2.StrictUndefined,
+        keep_trailing_newline=True,
+        autoescape=False,
+    )
+    environment.filters["repr"] = repr
+    environment.filters["doc"] = _docstring_safe
+    return environment
+
+
+def _context(theta: Theta) -> dict:
+    _check(theta)
+    by_name = {symbol.name: symbol for symbol in theta.matrix.free_symbols}
+    strays = sorted(set(by_name) - set(theta.symbols))
+    if strays:
+        raise ValueError(f"Theta depends on {strays}, which are not kept parameters")
+    symbols = [by_name[name] for name in theta.symbols if name in by_name]
+    matrix = theta.matrix
+    rows = [
+        ([_entry(theta, matrix[i, j], symbols) for j in range(matrix.cols)], label)
+        for i, label in enumerate(theta.row_labels)
+    ]
+    defaults = {name: theta.defaults.get(name) for name in theta.symbols}
+    example_k = 1.0 if theta.true_value is None else _float(theta.true_value)
+    return {
+        "version": __version__,
+        "model": theta.model,
+        "description": theta.description,
+        "source": theta.source_name,
+        "input": theta.input,
+        "output": theta.output,
+        "unknown": theta.unknown,
+        "true_value": None if theta.true_value is None else _doc_text(str(theta.true_value)),
+        "true_value_float": "None" if theta.true_value is None else repr(example_k),
+        "transfer": f"({theta.num})/({theta.den})",
+        "numerator": _wrapped("B(s)", theta.num),
+        "denominator": _wrapped("A(s)", theta.den),
+        "n": theta.n,
+        "m": theta.m,
+        "N": theta.N,
+        "assumed": ", ".join(f"{name} = {_doc_text(str(v))}" for name, v in theta.assumed.items()),
+        "symbols": theta.symbols,
+        "parameters_doc": ", ".join(
+            f"{name} = {_doc_text(str(value))}" if value is not None else f"{name} (no value)"
+            for name, value in defaults.items()
+        ),
+        "defaults": "{"
+        + ", ".join(
+            f"{name!r}: {'None' if value is None else repr(_float(value))}"
+            for name, value in defaults.items()
+        )
+        + "}",
+        "rows": rows,
+        "example_k": repr(example_k),
+        "example_k0": repr(example_k / 2),
+    }
+
+
+def render(theta: Theta) -> str:
+    """The generated module's source text for `theta` (deterministic)."""
+    return _environment().get_template("estimator.py.j2").render(_context(theta))
+
+
+def default_path(theta: Theta) -> Path:
+    return Path("generated") / f"{theta.model}.py"
+
+
+def write_atomic(path: str | Path, data: str | bytes) -> None:
+    """Write a file so that readers see the old content or the new, never a part."""
+    path = Path(path)
+    payload = data.encode("utf-8") if isinstance(data, str) else data
+    handle, temporary = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
+    try:
+        with os.fdopen(handle, "wb") as file:
+            file.write(payload)
+        umask = os.umask(0)
+        os.umask(umask)
+        os.chmod(temporary, 0o666 & ~umask)
+        os.replace(temporary, path)
+    except BaseException:
+        Path(temporary).unlink(missing_ok=True)
+        raise
+
+
+def load(theta: Theta) -> types.ModuleType:
+    """The generated module for `theta`, built in memory: what `mtt simulate/estimate` run.
+
+    The source is the same text `mtt compile` writes (see the module docstring for why
+    running it is safe); it is registered in sys.modules, as an import would, so that its
+    dataclass can find its own module.
+    """
+    name = f"_mtt_generated_{theta.model}"
+    module = types.ModuleType(name)
+    sys.modules[name] = module
+    try:
+        exec(compile(render(theta), f"<mtt generated {theta.model}>", "exec"), module.__dict__)
+    except BaseException:
+        del sys.modules[name]
+        raise
+    return module

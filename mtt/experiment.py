@@ -1,0 +1,422 @@
+"""`mtt compile`, `mtt simulate` and `mtt estimate`: the generated estimator at work.
+
+`compile` writes the estimator module. `simulate` and `estimate` build the same module
+in memory (codegen.load) and call its functions, so the algorithm exists once, in the
+template; what is here is the experiment around it: data, runs, tables and figures.
+"""
+
+from __future__ import annotations
+
+import argparse
+import csv
+import io
+import json
+import sys
+from collections.abc import Callable
+from dataclasses import dataclass
+from pathlib import Path
+from types import ModuleType
+
+import numpy as np
+import sympy
+from tqdm import tqdm
+
+from mtt import codegen, pipeline
+from mtt.options import add_parameter_options, choice_from_args
+from mtt.parse import LAPLACE, parse_expression
+
+EXIT_OK, EXIT_STOPPED, EXIT_USAGE = 0, 1, 2
+DEFAULT_T_END, DEFAULT_DT, DEFAULT_SEED = 10.0, 0.01, 1
+MAX_SAMPLES = 10**7
+
+
+class UsageError(Exception):
+    """Options or data that do not make an experiment; the message says why."""
+
+
+# the data ------------------------------------------------------------------------------
+
+
+@dataclass(frozen=True)
+class Data:
+    t: np.ndarray
+    u: np.ndarray
+    y: np.ndarray
+    clean: np.ndarray | None  # the output before noise, when simulated
+    k: float | None  # the true value, when simulated
+    note: str  # where the data came from, for tables and titles
+
+
+def _input(module: ModuleType, args) -> tuple[np.ndarray, np.ndarray]:
+    """The input samples: a unit step from t = 0 on a regular grid, or a CSV file's."""
+    if args.input not in (None, "step"):
+        if args.t_end is not None or args.dt is not None:
+            raise UsageError("--t-end and --dt apply to --input step; the file gives the times")
+        return module.read_csv(args.input, ("t", "u"))
+    t_end = DEFAULT_T_END if args.t_end is None else args.t_end
+    dt = DEFAULT_DT if args.dt is None else args.dt
+    if not (0 < dt <= t_end < np.inf):
+        raise UsageError(f"need 0 < --dt <= --t-end, not --dt {dt} and --t-end {t_end}")
+    count = max(1, round(t_end / dt))
+    if count >= MAX_SAMPLES:
+        raise UsageError(f"--t-end / --dt = {count} samples is too many (at most {MAX_SAMPLES})")
+    t = np.linspace(0.0, t_end, count + 1)
+    return t, np.ones_like(t)
+
+
+def experiment_data(module: ModuleType, args) -> Data:
+    """Measured data (--data), or a simulation of the model with the chosen input and noise."""
+    simulation = {"--input": args.input, "--t-end": args.t_end, "--dt": args.dt, "--k": args.k}
+    simulation |= {"--noise-uniform": args.noise_uniform, "--seed": args.seed}
+    if getattr(args, "data", None):
+        given = [flag for flag, value in simulation.items() if value is not None]
+        if given:
+            raise UsageError(f"--data and {given[0]} do not go together ({given[0]} simulates)")
+        t, u, y = module.read_csv(args.data)
+        return Data(t, u, y, None, None, f"{t.size} samples from {args.data}")
+    t, u = _input(module, args)
+    k = module.TRUE_VALUE if args.k is None else args.k
+    if k is None:
+        raise UsageError(f"the model gives no value of {module.UNKNOWN} to simulate with: pass --k")
+    clean = module.simulate(t, u, k, hold=args.hold)
+    noise = args.noise_uniform or 0.0
+    if not 0 <= noise < np.inf:
+        raise UsageError(f"--noise-uniform must be >= 0, not {noise}")
+    seed = DEFAULT_SEED if args.seed is None else args.seed
+    y = clean + np.random.default_rng(seed).uniform(-noise, noise, clean.size) if noise else clean
+    source = "a unit step" if args.input in (None, "step") else args.input
+    note = f"{t.size} samples simulated with {module.UNKNOWN} = {k:g}, input {source}"
+    if noise:
+        note += f", noise uniform in [-{noise:g}, {noise:g}] (seed {seed})"
+    return Data(t, u, y, clean, k, note)
+
+
+# the runs ------------------------------------------------------------------------------
+
+
+@dataclass(frozen=True)
+class Run:
+    k0: float
+    filter: str  # C(s) as the user wrote it (or the default)
+    result: object  # the generated module's Estimate
+
+
+def _polynomial(text: str) -> list[float]:
+    """--filter "(1+s)^5": a polynomial in s, parsed by mtt's expression grammar."""
+    expr = parse_expression(text, variables=frozenset({LAPLACE}))
+    try:
+        poly = sympy.Poly(expr, sympy.Symbol(LAPLACE))
+    except sympy.PolynomialError:
+        raise UsageError(f"--filter {text!r} is not a polynomial in {LAPLACE}") from None
+    return [float(c) for c in poly.all_coeffs()]
+
+
+def _filters(module: ModuleType, args) -> list[tuple[str, object]]:
+    """(label, C) for each filter asked for: C as the generated `estimate` takes it."""
+    power = module.n + 1
+    filters = [(text.strip(), _polynomial(text)) for text in args.filter or []]
+    for T in args.filter_T or []:
+        filters.append((f"(1 + s)^{power}" if T == 1 else f"(1 + {T:g} s)^{power}", T))
+    return filters or [(f"(1 + s)^{power}", None)]
+
+
+def run_all(module: ModuleType, data: Data, args) -> list[Run]:
+    """One estimate per filter and starting value, with a progress bar on a terminal."""
+    filters = _filters(module, args)
+    options = dict(beta=args.beta, S0=args.S0, hold=args.hold, rtol=args.rtol, atol=args.atol)
+    span = float(data.t[-1] - data.t[0])
+    runs = []
+    with tqdm(
+        total=span * len(filters) * len(args.k0),
+        desc="estimating",
+        unit="s",
+        delay=1.0,
+        leave=False,
+        disable=not sys.stderr.isatty(),
+        bar_format="{l_bar}{bar}| {n:.3g}/{total:.3g} s of data [{elapsed}<{remaining}]",
+    ) as bar:
+        for label, C in filters:
+            for k0 in args.k0:
+                start = bar.n
+                result = module.estimate(
+                    data.t, data.u, data.y, k0=k0, C=C, **options,
+                    progress=lambda now, start=start: bar.update(start + now - data.t[0] - bar.n),
+                )  # fmt: skip
+                bar.update(start + span - bar.n)
+                runs.append(Run(k0, label, result))
+    return runs
+
+
+def _normalised_cost(result) -> Callable:
+    """(J(k) - J(k^)) / J_2(k^): independent of the scale of C(s), and (k - k^)^2 / 2 near k^."""
+    return lambda k: result.cost(k) / result.J[0, -1]
+
+
+def _labels(runs: list[Run]) -> list[str]:
+    several_k0 = len({run.k0 for run in runs}) > 1
+    several_filters = len({run.filter for run in runs}) > 1
+    labels = []
+    for run in runs:
+        parts = [f"k0 = {run.k0:g}"] if several_k0 or not several_filters else []
+        parts += [f"C(s) = {run.filter}"] if several_filters else []
+        labels.append(", ".join(parts))
+    return labels
+
+
+def _cost_range(runs: list[Run], data: Data, given: list[float] | None) -> tuple[float, float]:
+    if given is not None:
+        low, high = given
+        if not low < high:
+            raise UsageError(f"--cost-range needs A < B, not {low:g} {high:g}")
+        return low, high
+    points = [run.k0 for run in runs] + [value for run in runs for value in run.result.minima()]
+    points += [] if data.k is None else [data.k]
+    low, high = min(points), max(points)
+    margin = max(0.25 * (high - low), 0.5)
+    return low - margin, high + margin
+
+
+# the commands --------------------------------------------------------------------------
+
+
+def _csv_text(header: list[str], rows) -> str:
+    buffer = io.StringIO()
+    writer = csv.writer(buffer, lineterminator="\n")
+    writer.writerow(header)
+    writer.writerows(rows)
+    return buffer.getvalue()
+
+
+def _model(args) -> ModuleType:
+    return codegen.load(pipeline.theta_for(args.file, choice_from_args(args)))
+
+
+def _guarded(action: Callable[[argparse.Namespace], int]) -> Callable[[argparse.Namespace], int]:
+    """Bad options, data and files end with a message and exit status 2, not a traceback."""
+
+    def run(args) -> int:
+        try:
+            return action(args)
+        except (UsageError, ValueError) as exc:
+            print(f"mtt {args.command}: error: {exc}", file=sys.stderr)
+        except OSError as exc:
+            print(f"mtt {args.command}: error: {exc.filename}: {exc.strerror}", file=sys.stderr)
+        return EXIT_USAGE
+
+    return run
+
+
+def cmd_compile(args) -> int:
+    theta = pipeline.theta_for(args.file, choice_from_args(args))
+    source = codegen.render(theta)
+    path = Path(args.output) if args.output else codegen.default_path(theta)
+    if not args.output:
+        path.parent.mkdir(parents=True, exist_ok=True)
+    codegen.write_atomic(path, source)
+    kept = f", {', '.join(theta.symbols)} kept symbolic" if theta.symbols else ""
+    print(
+        f"wrote {path}: estimator of {theta.unknown} for {theta.model} "
+        f"(n = {theta.n}, m = {theta.m}, N = {theta.N}{kept})"
+    )
+    return EXIT_OK
+
+
+def cmd_simulate(args) -> int:
+    from mtt import plots  # matplotlib takes a quarter second to import: only plotting pays
+
+    module = _model(args)
+    data = experiment_data(module, args)
+    if args.data_plot:
+        plots.data(
+            args.data_plot, data.t, data.u, data.y, clean=data.clean,
+            title=f"{module.MODEL}: {data.note}", input_label=module.INPUT,
+            output_label=module.OUTPUT,
+        )  # fmt: skip
+    text = _csv_text(["t", "u", "y"], zip(data.t, data.u, data.y, strict=True))
+    if args.csv:
+        codegen.write_atomic(args.csv, text)
+    elif not args.data_plot:
+        sys.stdout.write(text)
+    return EXIT_OK
+
+
+def cmd_estimate(args) -> int:
+    from mtt import plots  # matplotlib takes a quarter second to import: only plotting pays
+
+    module = _model(args)
+    data = experiment_data(module, args)
+    runs = run_all(module, data, args)
+    labels = _labels(runs)
+    curves = [
+        plots.Curve(label, run.result.t, run.result.khat, run.result.minima(),
+                    _normalised_cost(run.result))
+        for label, run in zip(labels, runs, strict=True)
+    ]  # fmt: skip
+    title = f"{module.MODEL}: {data.note}"
+    if args.data_plot:
+        plots.data(
+            args.data_plot, data.t, data.u, data.y, clean=data.clean, title=title,
+            input_label=module.INPUT, output_label=module.OUTPUT,
+        )  # fmt: skip
+    if args.plot:
+        plots.estimates(
+            args.plot, curves, unknown=module.UNKNOWN, true_value=data.k,
+            title=f"{module.MODEL}: estimate of {module.UNKNOWN} (beta = {args.beta:g}, "
+            f"S0 = {args.S0:g})",
+        )  # fmt: skip
+    if args.cost_plot:
+        plots.cost(
+            args.cost_plot, curves, k_range=_cost_range(runs, data, args.cost_range),
+            unknown=module.UNKNOWN, true_value=data.k,
+            title=f"{module.MODEL}: normalised cost at t = {data.t[-1]:g}",
+        )  # fmt: skip
+    if args.csv:
+        _write_trajectories(args.csv, runs, module.N)
+    for run in runs:
+        if not run.result.ok:
+            print(
+                f"mtt estimate: warning: k0 = {run.k0:g}, C(s) = {run.filter}: "
+                f"{run.result.message}",
+                file=sys.stderr,
+            )
+    if args.json:
+        print(json.dumps(_record(module, runs)))
+    else:
+        print(_table(module, data, runs))
+    return EXIT_OK if all(run.result.ok for run in runs) else EXIT_STOPPED
+
+
+def _record(module: ModuleType, runs: list[Run]) -> dict:
+    """The --json record (its shape is a public contract)."""
+    return {
+        "model": module.MODEL,
+        "unknown": module.UNKNOWN,
+        "runs": [
+            {
+                "k0": float(run.k0),
+                "filter": run.filter,
+                "k": run.result.k,
+                "minima": [float(value) for value in run.result.minima()],
+            }
+            for run in runs
+        ],
+    }
+
+
+def _table(module: ModuleType, data: Data, runs: list[Run]) -> str:
+    rows = [("k0", "C(s)", f"{module.UNKNOWN} at t = {data.t[-1]:g}", "local minima of J")]
+    for run in runs:
+        minima = ", ".join(f"{value:.5g}" for value in run.result.minima())
+        final = f"{run.result.k:.5g}" + ("" if run.result.ok else " (stopped)")
+        rows.append((f"{run.k0:g}", run.filter, final, minima))
+    widths = [max(len(row[i]) for row in rows) for i in range(len(rows[0]))]
+    lines = [f"{module.MODEL}: {data.note}"]
+    for row in rows:
+        cells = (cell.ljust(width) for cell, width in zip(row, widths, strict=True))
+        lines.append(("  " + "  ".join(cells)).rstrip())
+    return "\n".join(lines)
+
+
+def _write_trajectories(path: str, runs: list[Run], N: int) -> None:
+    header = ["run", "k0", "filter", "t", "khat"] + [f"J{i}" for i in range(2, 2 * N + 1)]
+    rows = (
+        [number, run.k0, run.filter, t, khat, *J]
+        for number, run in enumerate(runs, start=1)
+        for t, khat, J in zip(run.result.t, run.result.khat, run.result.J.T, strict=True)
+    )
+    codegen.write_atomic(path, _csv_text(header, rows))
+
+
+# argparse wiring -----------------------------------------------------------------------
+
+
+def _data_options(parser: argparse.ArgumentParser, measured: bool) -> None:
+    group = parser.add_argument_group("data")
+    if measured:
+        group.add_argument(
+            "--data", metavar="FILE.csv", help="measured data: a CSV file with columns t,u,y"
+        )
+    group.add_argument(
+        "--input",
+        metavar="step|FILE.csv",
+        help="simulated input: a unit step at t = 0 (default), or a CSV file with columns t,u",
+    )
+    group.add_argument("--t-end", type=float, help=f"duration (default {DEFAULT_T_END:g})")
+    group.add_argument("--dt", type=float, help=f"sampling interval (default {DEFAULT_DT:g})")
+    group.add_argument("--k", type=float, help="true value of the unknown (default: the file's)")
+    group.add_argument(
+        "--noise-uniform", type=float, metavar="A", help="add noise uniform in [-A, A] to y"
+    )
+    group.add_argument("--seed", type=int, help=f"noise seed (default {DEFAULT_SEED})")
+    group.add_argument(
+        "--hold",
+        choices=("linear", "zoh"),
+        default="linear",
+        help="how the input varies between samples (default linear)",
+    )
+    group.add_argument("--data-plot", metavar="FILE.png", help="plot input and output")
+
+
+def register(commands) -> None:
+    """Add compile, simulate and estimate to the `mtt` subcommands."""
+    compile_ = commands.add_parser(
+        "compile",
+        help="write the estimator module of a model",
+        description="Write a standalone Python module (numpy and scipy only) that identifies "
+        "the model's unknown parameter from input/output data.",
+    )
+    compile_.add_argument("file", metavar="FILE")
+    compile_.add_argument(
+        "-o", "--output", metavar="PATH", help="where to write it (default generated/MODEL.py)"
+    )
+    add_parameter_options(compile_)
+    compile_.set_defaults(run=_guarded(cmd_compile))
+
+    simulate = commands.add_parser(
+        "simulate",
+        help="simulate an experiment's data",
+        description="Simulate the model's output for an input, with optional noise; print the "
+        "samples as CSV (t,u,y) unless --csv or --data-plot is given.",
+    )
+    simulate.add_argument("file", metavar="FILE")
+    add_parameter_options(simulate)
+    _data_options(simulate, measured=False)
+    simulate.add_argument("--csv", metavar="FILE", help="write the samples (t,u,y)")
+    simulate.set_defaults(run=_guarded(cmd_simulate))
+
+    estimate = commands.add_parser(
+        "estimate",
+        help="identify the unknown from data (measured or simulated)",
+        description="Run the generated estimator once per starting value and filter; print "
+        "the final estimates and the local minima of the cost. Exit status 1 if a run "
+        "stopped early (the estimate left the region where the cost is convex).",
+    )
+    estimate.add_argument("file", metavar="FILE")
+    add_parameter_options(estimate)
+    _data_options(estimate, measured=True)
+    group = estimate.add_argument_group("estimator")
+    group.add_argument(
+        "--k0", type=float, nargs="+", required=True, metavar="V", help="initial estimate(s)"
+    )
+    group.add_argument("--beta", type=float, default=0.1, help="forgetting factor (default 0.1)")
+    group.add_argument("--S0", type=float, default=1e-4, help="initial weight (default 1e-4)")
+    group.add_argument(
+        "--filter",
+        nargs="+",
+        metavar="C(s)",
+        help='filter polynomial(s) in s, e.g. "(1+s)^5" (default (1 + s)^(n+1))',
+    )
+    group.add_argument(
+        "--filter-T", type=float, nargs="+", metavar="T", help="filter(s) (1 + sT)^(n+1)"
+    )
+    group.add_argument("--rtol", type=float, default=1e-6, help="solver relative tolerance")
+    group.add_argument("--atol", type=float, default=1e-9, help="solver absolute tolerance")
+    outputs = estimate.add_argument_group("outputs")
+    outputs.add_argument("--plot", metavar="FILE.png", help="plot the estimates against time")
+    outputs.add_argument("--cost-plot", metavar="FILE.png", help="plot the cost at the end")
+    outputs.add_argument(
+        "--cost-range", type=float, nargs=2, metavar=("A", "B"), help="k range of --cost-plot"
+    )
+    outputs.add_argument("--csv", metavar="FILE", help="write the trajectories as CSV")
+    outputs.add_argument("--json", action="store_true", help="print the results as JSON")
+    estimate.set_defaults(run=_guarded(cmd_estimate))

@@ -1,0 +1,119 @@
+"""The figures of an experiment, drawn as the paper draws them (matplotlib's Agg backend).
+
+Each function takes plain arrays and labels, so that it serves measured and simulated
+data alike, and writes its file atomically.
+"""
+
+from __future__ import annotations
+
+import io
+from collections.abc import Sequence
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+from matplotlib.backends.backend_agg import FigureCanvasAgg
+from matplotlib.figure import Figure
+
+from mtt.codegen import write_atomic
+
+
+@dataclass(frozen=True)
+class Curve:
+    """One run of the estimator, as the plots need it."""
+
+    label: str
+    t: np.ndarray
+    khat: np.ndarray
+    minima: np.ndarray  # local minima of the cost at the last time
+    normalised_cost: object  # k -> (J(k) - J(k^)) / J_2(k^) at the last time
+
+
+def _figure(rows: int = 1) -> tuple[Figure, list]:
+    figure = Figure(figsize=(7.0, 4.2 if rows == 1 else 5.6), layout="constrained")
+    FigureCanvasAgg(figure)
+    axes = figure.subplots(rows, 1, sharex=True, squeeze=False)[:, 0]
+    for ax in axes:
+        ax.grid(True, alpha=0.3)
+    return figure, list(axes)
+
+
+def _save(figure: Figure, path: str | Path) -> None:
+    buffer = io.BytesIO()
+    suffix = Path(path).suffix.lstrip(".").lower() or "png"
+    figure.savefig(buffer, format=suffix, dpi=120)
+    write_atomic(path, buffer.getvalue())
+
+
+def estimates(
+    path: str | Path,
+    curves: Sequence[Curve],
+    *,
+    title: str,
+    unknown: str,
+    true_value: float | None,
+) -> None:
+    """The estimate against time, one line per run (the paper's Figs. 2, 6 and 7)."""
+    figure, (ax,) = _figure()
+    for curve in curves:
+        ax.plot(curve.t, curve.khat, label=curve.label, linewidth=1.4)
+    if true_value is not None:
+        ax.axhline(true_value, color="black", linestyle="--", linewidth=0.9,
+                   label=f"true value {unknown} = {true_value:g}")  # fmt: skip
+    ax.set_xlabel("time t (s)")
+    ax.set_ylabel(f"estimate of {unknown}")
+    ax.set_title(title)
+    ax.legend(loc="best", fontsize="small")
+    _save(figure, path)
+
+
+def cost(
+    path: str | Path,
+    curves: Sequence[Curve],
+    *,
+    k_range: tuple[float, float],
+    title: str,
+    unknown: str,
+    true_value: float | None,
+) -> None:
+    """The normalised cost against k at the last time, minima marked (the paper's Fig. 8)."""
+    figure, (ax,) = _figure()
+    k = np.linspace(*k_range, 801)
+    for curve in curves:
+        (line,) = ax.plot(k, curve.normalised_cost(k), label=curve.label, linewidth=1.4)
+        inside = curve.minima[(curve.minima >= k_range[0]) & (curve.minima <= k_range[1])]
+        ax.plot(inside, curve.normalised_cost(inside), "o", color=line.get_color(), markersize=5)
+    if true_value is not None and k_range[0] <= true_value <= k_range[1]:
+        ax.axvline(true_value, color="black", linestyle="--", linewidth=0.9,
+                   label=f"true value {unknown} = {true_value:g}")  # fmt: skip
+    ax.set_xlim(*k_range)
+    ax.set_xlabel(f"{unknown}")
+    ax.set_ylabel(f"(J({unknown}) - J({unknown}^)) / J_2({unknown}^)")
+    ax.set_title(title)
+    ax.legend(loc="best", fontsize="small", title="dots: local minima", title_fontsize="small")
+    _save(figure, path)
+
+
+def data(
+    path: str | Path,
+    t: np.ndarray,
+    u: np.ndarray,
+    y: np.ndarray,
+    *,
+    title: str,
+    input_label: str,
+    output_label: str,
+    clean: np.ndarray | None = None,
+) -> None:
+    """Input and output samples against time (the paper's Fig. 5), and the noise-free output."""
+    figure, (top, bottom) = _figure(rows=2)
+    top.plot(t, u, color="tab:gray", linewidth=1.2)
+    top.set_ylabel(f"input {input_label}")
+    top.set_title(title)
+    bottom.plot(t, y, linewidth=0.9, label="output samples")
+    if clean is not None and not np.array_equal(clean, y):
+        bottom.plot(t, clean, color="black", linestyle="--", linewidth=1.0, label="without noise")
+        bottom.legend(loc="best", fontsize="small")
+    bottom.set_ylabel(f"output {output_label}")
+    bottom.set_xlabel("time t (s)")
+    _save(figure, path)
