@@ -131,122 +131,132 @@ def _outputs(causal: CausalBondGraph, component: Component, v: PortVariables) ->
     return names
 
 
-def _solve(rows: list[dict], unknowns: list[str], K: Domain) -> dict[str, Form] | None:
-    """Solve linear rows (forms equal to zero) for `unknowns` in terms of the other variables."""
+def _solve(
+    rows: list[dict], unknowns: list[str], K: Domain
+) -> tuple[dict[str, Form], list[str], list[Form]]:
+    """Solve linear rows (forms equal to zero) for as many of `unknowns` as they determine.
+
+    Returns the solved unknowns, each in terms of the other variables and of the unknowns
+    left free; the unknowns left free (a parameter of zero, say, or a degenerate algebraic
+    loop, keeps the rows from determining them); and the rows that remain as constraints.
+    """
     others = sorted({name for row in rows for name in row} - set(unknowns))
-    lhs = DomainMatrix(
-        [[K.convert(row.get(u, K.zero)) for u in unknowns] for row in rows],
-        (len(rows), len(unknowns)),
+    columns = unknowns + others
+    matrix = DomainMatrix(
+        [[K.convert(row.get(name, K.zero)) for name in columns] for row in rows],
+        (len(rows), len(columns)),
         K,
     )
-    rhs = DomainMatrix(
-        [[-K.convert(row.get(o, K.zero)) for o in others] for row in rows],
-        (len(rows), len(others)),
-        K,
-    )
-    if lhs.rank() < len(unknowns):
-        return None
-    solution = lhs.lu_solve(rhs) if others else None
-    return {
-        u: {
-            o: solution[i, j].element
-            for j, o in enumerate(others)
-            if solution is not None and solution[i, j].element != K.zero
+    reduced, pivots = matrix.rref()
+    solved: dict[str, Form] = {}
+    constraints: list[Form] = []
+    for i, pivot in enumerate(pivots):
+        form = {
+            name: reduced[i, j].element
+            for j, name in enumerate(columns)
+            if j != pivot and reduced[i, j].element != K.zero
         }
-        for i, u in enumerate(unknowns)
-    }
+        if pivot < len(unknowns):
+            solved[columns[pivot]] = {name: -c for name, c in form.items()}
+        else:
+            constraints.append({columns[pivot]: K.one, **form})
+    free = [u for u in unknowns if u not in solved]
+    return solved, free, constraints
 
 
 def derive(causal: CausalBondGraph, parametrisation: Parametrisation) -> Equations:
-    """The causal equations and the descriptor form; raise `ModelError` if they are singular."""
+    """The causal equations and the descriptor form.
+
+    Variables that the causal equations cannot give explicitly (a parameter of zero, a
+    degenerate algebraic loop) stay unknowns of the descriptor form, with the rows that
+    were to determine them as algebraic constraints: whether the whole system has a
+    unique solution is then decided by the pencil sE - A (see `transfer`).
+    """
     graph = causal.bondgraph
     values = _parameter_values(causal, parametrisation)
     K = _coefficient_domain(list(values.values()), parametrisation.free)
     explicit: dict[str, Form] = {}
+    extra: list[str] = []
+    constraints: list[Form] = []
     storage = [c for c in graph.components if c.type.role is Role.STORAGE]
     for component in graph.components:
         v = _port_variables(causal, component, values.get(component.name))
         rows = [
             {name: K.from_sympy(c) for name, c in row.items()} for row in component.type.relation(v)
         ]
-        outputs = _outputs(causal, component, v)
-        solved = _solve(rows, outputs, K)
-        if solved is None:
-            raise ModelError(
-                graph.source,
-                [
-                    error(
-                        "singular_model",
-                        f"{component.label} cannot impose {', '.join(outputs)} "
-                        f"with parameter {values.get(component.name)}",
-                        component.position,
-                    )
-                ],
-            )
+        solved, free, left = _solve(rows, _outputs(causal, component, v), K)
         explicit.update(solved)
+        extra += free
+        constraints += left
 
-    resolved = _eliminate(explicit, K, graph)
+    resolved, free, left = _eliminate(explicit, K)
+    extra += free
+    constraints = [_substitute(form, resolved, K) for form in constraints] + left
     relations = tuple((name, _to_expr(form, K)) for name, form in explicit.items())
-    return _descriptor(causal, parametrisation, K, storage, resolved, relations)
+    relations += tuple(("0", _to_expr(form, K)) for form in constraints)
+    return _descriptor(causal, parametrisation, K, storage, resolved, relations, extra, constraints)
 
 
-def _eliminate(explicit: dict[str, Form], K: Domain, graph) -> dict[str, Form]:
-    """Every variable in terms of the base variables, loops solved jointly."""
+def _substitute(form: Form, resolved: dict[str, Form], K: Domain, skip=frozenset()) -> Form:
+    """A form in terms of the base variables (those `resolved` does not give)."""
+    total: Form = {}
+    for w, c in form.items():
+        if w in skip:
+            continue
+        for base, cb in resolved.get(w, {w: K.one}).items():
+            total[base] = total.get(base, K.zero) + c * cb
+    return {b: c for b, c in total.items() if c != K.zero}
+
+
+def _eliminate(explicit: dict[str, Form], K: Domain) -> tuple[dict[str, Form], list, list]:
+    """Every variable in terms of the base variables, loops solved jointly.
+
+    Returns the resolved forms, and the loop variables left free with the loop's
+    remaining constraints when a loop does not determine them all.
+    """
     depends = nx.DiGraph()
     depends.add_nodes_from(explicit)
     for name, form in explicit.items():
         depends.add_edges_from((name, w) for w in form if w in explicit)
     condensed = nx.condensation(depends)
     resolved: dict[str, Form] = {}
-
-    def substitute(form: Form, skip: set[str] = frozenset()) -> Form:
-        total: Form = {}
-        for w, c in form.items():
-            if w in skip:
-                continue
-            for base, cb in (resolved[w] if w in explicit else {w: K.one}).items():
-                total[base] = total.get(base, K.zero) + c * cb
-        return {b: c for b, c in total.items() if c != K.zero}
+    extra: list[str] = []
+    constraints: list[Form] = []
 
     for node in reversed(list(nx.topological_sort(condensed))):
         members = sorted(condensed.nodes[node]["members"])
         if len(members) == 1 and not depends.has_edge(members[0], members[0]):
-            resolved[members[0]] = substitute(explicit[members[0]])
+            resolved[members[0]] = _substitute(explicit[members[0]], resolved, K)
             continue
         # an algebraic loop: v - sum(a_vw w, w in loop) = the rest, solved exactly together
         rows = []
         for v in members:
             row = {w: -c for w, c in explicit[v].items() if w in members}
             row[v] = row.get(v, K.zero) + K.one
-            for base, c in substitute(explicit[v], set(members)).items():
+            for base, c in _substitute(explicit[v], resolved, K, set(members)).items():
                 row[base] = row.get(base, K.zero) - c
             rows.append(row)
-        solved = _solve(rows, members, K)
-        if solved is None:
-            raise ModelError(
-                graph.source,
-                [
-                    error(
-                        "singular_model",
-                        f"an algebraic loop has no unique solution (through {', '.join(members)})",
-                    )
-                ],
-            )
+        solved, free, left = _solve(rows, members, K)
         resolved.update(solved)
-    return resolved
+        extra += free
+        constraints += left
+    return resolved, extra, constraints
 
 
 def _to_expr(form: Form, K: Domain) -> sympy.Expr:
     return sympy.Add(*(K.to_sympy(c) * sympy.Symbol(w) for w, c in form.items()))
 
 
-def _descriptor(causal, parametrisation, K, storage, resolved, relations) -> Equations:
+def _descriptor(
+    causal, parametrisation, K, storage, resolved, relations, extra, constraints
+) -> Equations:
     states = [_energy(c) for c in storage]
     rates = {"d" + x: i for i, x in enumerate(states)}
-    index = {x: i for i, x in enumerate(states)}
     output = resolved.get(OUTPUT, {})
     auxiliary = [w for w in rates if w in output]  # y depends on a dependent state's rate
-    names = states + auxiliary
+    names = states + auxiliary + extra
+    index = {x: i for i, x in enumerate(states)}
+    index.update((z, len(states) + len(auxiliary) + j) for j, z in enumerate(extra))
     size = len(names)
     E = [[K.zero] * size for _ in range(size)]
     A = [[K.zero] * size for _ in range(size)]
@@ -265,14 +275,16 @@ def _descriptor(causal, parametrisation, K, storage, resolved, relations) -> Equ
         x = states[row]
         if causal.integral(component.name):  # x' = form
             E[row][row] += K.one
-            place(row, resolved["d" + x], K.one)
+            place(row, resolved.get("d" + x, {"d" + x: K.one}), K.one)
         else:  # 0 = -x + form
             A[row][row] -= K.one
-            place(row, resolved[x], K.one)
+            place(row, resolved.get(x, {x: K.one}), K.one)
     for j, w in enumerate(auxiliary):  # x_j' = z_j
         row = len(states) + j
         E[row][rates[w]] += K.one
         A[row][row] += K.one
+    for j, form in enumerate(constraints):  # 0 = form
+        place(len(states) + len(auxiliary) + j, form, K.one)
     C = [[K.zero] * size]
     D = [[K.zero]]
     for w, c in output.items():
