@@ -78,6 +78,8 @@ def equations(graph: BondGraph, values: Mapping[sympy.Symbol, sympy.Expr]):
         name, kind = component.name, component.type.name
         touching = [b for b in bonds.values() if name in (b.tail, b.head)]
         p = component.argument.value.xreplace(values) if component.argument is not None else None
+        if p is not None and p.has(sympy.zoo, sympy.oo, sympy.nan):
+            raise Singular(f"the parameter of {component.label} is infinite")
         if kind in ("Se", "Sf", "De", "Df", "R", "C", "I"):
             (bond,) = touching
             E, F = e[bond.number], f[bond.number]
@@ -117,8 +119,6 @@ def equations(graph: BondGraph, values: Mapping[sympy.Symbol, sympy.Expr]):
 
 def transfer(graph: BondGraph, values: Mapping[sympy.Symbol, sympy.Expr]) -> sympy.Expr:
     """G(s) = y/u by exact Gauss-Jordan elimination; raise `Singular` if M is singular."""
-    if any(v.has(sympy.zoo, sympy.oo, sympy.nan) for v in values.values()):
-        raise Singular("a parameter is infinite")
     rows, unknowns, U, y = equations(graph, values)
     if len(rows) != len(unknowns):
         raise AssertionError(f"{len(rows)} equations for {len(unknowns)} unknowns")
