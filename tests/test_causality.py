@@ -5,10 +5,12 @@ from __future__ import annotations
 from pathlib import Path
 
 import pytest
+import sympy
+from oracle import oracle_tf
 
 from mtt.causality import CausalBondGraph, assign, describe
 from mtt.diagnostics import ModelError, Source
-from mtt.pipeline import load
+from mtt.pipeline import load, transfer_for
 
 ROOT = Path(__file__).resolve().parent.parent
 SYSTEMS = Path(__file__).resolve().parent / "data" / "systems"
@@ -178,3 +180,66 @@ def test_unused_sources_keep_their_fixed_causality():
     check_rules(c)
     assert c.imposes_effort("bias", 2)  # Se:bias (set to zero) still imposes effort
     assert not c.imposes_effort("leak", 6)  # Sf:leak still imposes flow
+
+
+# --- a junction with a single bond fixes a variable, like a source ----------------------
+
+SHORTED = """model shorted
+param r = 2
+param r2 = 3
+Se:v -> 1:a
+1:a -> R:r
+1:a -> 0:n
+0:n -> R:r2
+0:n -> 1:short
+1:a -> Df:i
+"""
+
+
+def test_single_bond_junction_is_fixed_first(models):
+    # 1:short has one bond: its effort is zero, so it fixes the effort of 0:n, which 0:n
+    # imposes on R:r2 and on 1:a; with Se and Df, 1:a then has its effort from three bonds
+    # and takes its flow from R:r: both resistors are forced into conductance causality,
+    # nothing is arbitrary (before, both were reported as algebraic loops)
+    c = assign(models.build(SHORTED))
+    check_rules(c)
+    assert c.loops == ()
+    assert c.imposes_effort("short", 5)
+    assert not c.imposes_effort("r2", 4) and not c.imposes_effort("r", 2)
+
+
+def test_single_bond_junctions_do_not_cause_false_conflicts(tmp_path):
+    # Found by comparing with the oracle on random graphs: 1:j3 and 0:j4 have a single
+    # bond each. The model has a unique solution (G = 0), with C:e2 and C:e4 dependent.
+    path = tmp_path / "dangling.bg"
+    path.write_text(
+        """model dangling
+param p1 = 2
+param p2 = 3
+unknown k = 1
+1:j0 -> GY:g1(k) -> 1:j1
+0:j2 -> 1:j0
+1:j0 -> 1:j3
+0:j4 -> 1:j1
+Se:u -> 1:j1
+0:j2 -> Df:y
+1:j1 -> C:e1(k*p1)
+1:j0 -> C:e2(p2)
+1:j1 -> R:e3(k*p1)
+0:j2 -> C:e4(k)
+"""
+    )
+    c = causal(path)
+    check_rules(c)
+    assert c.dependent == ("e2", "e4")
+    tf = transfer_for(path)
+    assert tf.numerator == 0 and oracle_tf(path) == 0
+
+
+def test_shorted_network_transfer_function(tmp_path):
+    # v = r i + 0: G = 1/r = 1/2
+    path = tmp_path / "shorted.bg"
+    path.write_text(SHORTED)
+    tf = transfer_for(path)
+    assert (tf.numerator, tf.denominator) == (1, 2)
+    assert oracle_tf(path) == sympy.Rational(1, 2)
