@@ -6,7 +6,8 @@ MTT := $(BIN)/mtt
 STAMP := $(VENV)/.installed-stamp
 MODELS := $(wildcard models/*.bg)
 
-.PHONY: all test demo lint format check clean
+.PHONY: all test demo lint format check clean compile figures dc_drive absorber absorber_filter \
+	absorber_cost FORCE
 
 all: test
 
@@ -32,6 +33,64 @@ check: $(STAMP)
 demo: $(STAMP)
 	$(MTT) check $(MODELS)
 	@for model in $(MODELS); do $(MTT) show $$model; echo; done
+	$(MAKE) --no-print-directory compile figures
+	@echo; echo "Final estimates (tables in $(FIGURES)/*.txt):"
+	@for table in $(TABLES); do echo; cat $$table; done
+
+# Estimators ----------------------------------------------------------------------------
+# `mtt compile` options per model. The absorber keeps tau and l symbolic, so that its
+# Theta is exactly the paper's eq. (27) with tau = 2, l = 0.5 supplied at run time
+# (substituting them first would give a canonical Theta scaled by 2, and with the same
+# S0 a different trajectory). Its experiments below pass the same option.
+COMPILE_OPTIONS_absorber := --keep tau,l
+GENERATED := $(patsubst models/%.bg,generated/%.py,$(MODELS))
+
+compile: $(GENERATED)
+
+generated/%.py: models/%.bg $(STAMP) FORCE
+	$(MTT) compile $< -o $@ $(COMPILE_OPTIONS_$*)
+
+FORCE:
+
+# The paper's experiments (sections 6 and 7), one command line each --------------------
+# Figures land in figures/, the table of final estimates beside them (.txt).
+# Every experiment: unit step input sampled every 0.01 s, beta = 0.1, S0 = 1e-4.
+FIGURES := figures
+PAPER := --beta 0.1 --S0 1e-4
+ABSORBER := models/absorber.bg $(COMPILE_OPTIONS_absorber) --t-end 4 --noise-uniform 0.02
+TABLES := $(addprefix $(FIGURES)/,dc_drive.txt absorber.txt absorber_filter.txt absorber_cost.txt)
+
+figures: dc_drive absorber absorber_filter absorber_cost
+
+# Fig. 2: DC drive, k = 10, 10 s, C(s) = (1 + s)^5, from k0 = 0, 5 and 20.
+dc_drive: $(STAMP)
+	@mkdir -p $(FIGURES)
+	$(MTT) estimate models/dc_drive.bg --t-end 10 $(PAPER) --filter "(1+s)^5" --k0 0 5 20 \
+		--plot $(FIGURES)/fig2_dc_drive.png > $(FIGURES)/dc_drive.txt
+	@cat $(FIGURES)/dc_drive.txt
+
+# Figs. 5 and 6: absorber, k = 0.72, 4 s, output noise uniform in [-0.02, 0.02],
+# C(s) = (1 + s)^4, from k0 = 0, 0.25, 0.5, 0.75 and 1.
+absorber: $(STAMP)
+	@mkdir -p $(FIGURES)
+	$(MTT) estimate $(ABSORBER) $(PAPER) --filter "(1+s)^4" --k0 0 0.25 0.5 0.75 1 \
+		--data-plot $(FIGURES)/fig5_absorber_data.png \
+		--plot $(FIGURES)/fig6_absorber_estimates.png > $(FIGURES)/absorber.txt
+	@cat $(FIGURES)/absorber.txt
+
+# Fig. 7: absorber, k0 = 1, C(s) = (1 + sT)^4 for T = 0.5, 1 and 2.
+absorber_filter: $(STAMP)
+	@mkdir -p $(FIGURES)
+	$(MTT) estimate $(ABSORBER) $(PAPER) --filter-T 0.5 1 2 --k0 1 \
+		--plot $(FIGURES)/fig7_absorber_filter.png > $(FIGURES)/absorber_filter.txt
+	@cat $(FIGURES)/absorber_filter.txt
+
+# Fig. 8: the normalised cost at t = 4 against k, for the three filters of Fig. 7.
+absorber_cost: $(STAMP)
+	@mkdir -p $(FIGURES)
+	$(MTT) estimate $(ABSORBER) $(PAPER) --filter-T 0.5 1 2 --k0 1 --cost-range -1 1 \
+		--cost-plot $(FIGURES)/fig8_absorber_cost.png > $(FIGURES)/absorber_cost.txt
+	@cat $(FIGURES)/absorber_cost.txt
 
 clean:
 	rm -rf $(VENV) build dist .pytest_cache .ruff_cache

@@ -26,7 +26,7 @@ from mtt.options import add_parameter_options, choice_from_args
 from mtt.parse import LAPLACE, parse_expression
 
 EXIT_OK, EXIT_STOPPED, EXIT_USAGE = 0, 1, 2
-DEFAULT_T_END, DEFAULT_DT, DEFAULT_SEED = 10.0, 0.01, 1
+DEFAULT_T_END, DEFAULT_DT, DEFAULT_SEED = 10.0, 0.01, 0
 MAX_SAMPLES = 10**7
 
 
@@ -253,6 +253,9 @@ def cmd_estimate(args) -> int:
         for label, run in zip(labels, runs, strict=True)
     ]  # fmt: skip
     title = f"{module.MODEL}: {data.note}"
+    settings = f"\u03b2 = {args.beta:g}, S\u2080 = {args.S0:g}"
+    if len({run.filter for run in runs}) == 1:
+        settings += f", C(s) = {runs[0].filter}"
     if args.data_plot:
         plots.data(
             args.data_plot, data.t, data.u, data.y, clean=data.clean, title=title,
@@ -261,8 +264,7 @@ def cmd_estimate(args) -> int:
     if args.plot:
         plots.estimates(
             args.plot, curves, unknown=module.UNKNOWN, true_value=data.k,
-            title=f"{module.MODEL}: estimate of {module.UNKNOWN} (beta = {args.beta:g}, "
-            f"S0 = {args.S0:g})",
+            title=f"{module.MODEL}: estimate of {module.UNKNOWN} ({settings})",
         )  # fmt: skip
     if args.cost_plot:
         plots.cost(

@@ -7,6 +7,7 @@ data alike, and writes its file atomically.
 from __future__ import annotations
 
 import io
+import textwrap
 from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -16,6 +17,11 @@ from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 
 from mtt.codegen import write_atomic
+
+
+def _hat(name: str) -> str:
+    """The estimate of `name`, written with a circumflex (over its last letter)."""
+    return name + "\u0302"
 
 
 @dataclass(frozen=True)
@@ -29,10 +35,11 @@ class Curve:
     normalised_cost: object  # k -> (J(k) - J(k^)) / J_2(k^) at the last time
 
 
-def _figure(rows: int = 1) -> tuple[Figure, list]:
-    figure = Figure(figsize=(7.0, 4.2 if rows == 1 else 5.6), layout="constrained")
+def _figure(heights: tuple[int, ...] = (1,)) -> tuple[Figure, list]:
+    figure = Figure(figsize=(7.0, 4.2 if len(heights) == 1 else 5.6), layout="constrained")
     FigureCanvasAgg(figure)
-    axes = figure.subplots(rows, 1, sharex=True, squeeze=False)[:, 0]
+    axes = figure.subplots(len(heights), 1, sharex=True, squeeze=False, height_ratios=heights)
+    axes = axes[:, 0]
     for ax in axes:
         ax.grid(True, alpha=0.3)
     return figure, list(axes)
@@ -61,8 +68,8 @@ def estimates(
         ax.axhline(true_value, color="black", linestyle="--", linewidth=0.9,
                    label=f"true value {unknown} = {true_value:g}")  # fmt: skip
     ax.set_xlabel("time t (s)")
-    ax.set_ylabel(f"estimate of {unknown}")
-    ax.set_title(title)
+    ax.set_ylabel(f"estimate {_hat(unknown)} of {unknown}")
+    ax.set_title(title, fontsize="medium")
     ax.legend(loc="best", fontsize="small")
     _save(figure, path)
 
@@ -87,9 +94,10 @@ def cost(
         ax.axvline(true_value, color="black", linestyle="--", linewidth=0.9,
                    label=f"true value {unknown} = {true_value:g}")  # fmt: skip
     ax.set_xlim(*k_range)
-    ax.set_xlabel(f"{unknown}")
-    ax.set_ylabel(f"(J({unknown}) - J({unknown}^)) / J_2({unknown}^)")
-    ax.set_title(title)
+    ax.set_xlabel(unknown)
+    hat = _hat(unknown)
+    ax.set_ylabel(f"normalised cost  (J({unknown}) \u2212 J({hat})) / J\u2082({hat})")
+    ax.set_title(title, fontsize="medium")
     ax.legend(loc="best", fontsize="small", title="dots: local minima", title_fontsize="small")
     _save(figure, path)
 
@@ -106,10 +114,10 @@ def data(
     clean: np.ndarray | None = None,
 ) -> None:
     """Input and output samples against time (the paper's Fig. 5), and the noise-free output."""
-    figure, (top, bottom) = _figure(rows=2)
+    figure, (top, bottom) = _figure(heights=(1, 3))
     top.plot(t, u, color="tab:gray", linewidth=1.2)
     top.set_ylabel(f"input {input_label}")
-    top.set_title(title)
+    top.set_title("\n".join(textwrap.wrap(title, 80)), fontsize="medium")
     bottom.plot(t, y, linewidth=0.9, label="output samples")
     if clean is not None and not np.array_equal(clean, y):
         bottom.plot(t, clean, color="black", linestyle="--", linewidth=1.0, label="without noise")
