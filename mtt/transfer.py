@@ -81,7 +81,25 @@ def transfer_function(equations: Equations) -> TransferFunction:
         x = xnum.convert_to(F)
         G = sum((C[0, j].element * x[j, 0].element for j in range(size)), F.zero)
         G = G / F.convert_from(den, R) + D
+    if any(not isinstance(g, sympy.Symbol) for g in gens):
+        G = _evaluate_constants(equations, F, G)
     return _canonical(equations, F, gens, G)
+
+
+def _evaluate_constants(equations: Equations, F, G):
+    """Apply the relations between irrational constants (sqrt(2)**2 = 2, ...).
+
+    A known parameter like sqrt(2) is a generator of the coefficient field, which knows
+    nothing of its algebraic relations: terms that vanish by them would survive and leave
+    G non-canonical (wrong degree, sign and content). Written out, sympy evaluates them.
+    """
+    num, den = (sympy.expand(p.as_expr()) for p in (G.numer, G.denom))
+    if den == 0:
+        raise ModelError(
+            equations.causal.bondgraph.source,
+            [error("singular_model", "the equations have no unique solution")],
+        )
+    return F.from_sympy(num) / F.from_sympy(den)
 
 
 def _canonical(equations: Equations, F, gens, G) -> TransferFunction:
