@@ -434,3 +434,33 @@ def test_infinite_parameter_is_singular(tmp_path):
         transfer_for(ROOT / "models" / "dc_drive.bg", choice(ks=0))
     assert caught.value.kinds() == ["singular_model"]
     assert "C:cs" in caught.value.errors[0].message
+
+
+# --- irrational known parameters: their algebraic relations apply ------------------------
+
+IRRATIONAL = """model irrational
+param n = sqrt(2)
+unknown k = 1
+Sf:i -> 0:a
+0:a -> TF:t(n) -> 0:b
+0:b -> C:c1(1)
+C:c2(1/2) -> 0:a
+0:a -> De:v
+"""
+
+
+def test_irrational_constants_cancel_exactly(tmp_path):
+    # Through the TF (n = sqrt(2)) C:c1 draws c1 s e / n^2 = s e / 2 from 0:a, and the
+    # reversed C:c2 gives s e / 2 back: only R:r(k) remains, G = k. Before, sqrt(2) was
+    # an independent generator and G came out as -4 k / -4 with n = 1.
+    path = model_file(tmp_path, IRRATIONAL + "0:a -> R:r(k)\n")
+    tf = transfer_for(path)
+    assert_tf(tf, k, 1)
+    assert tf.degree("den") == 0
+    assert sympy.cancel(oracle_tf(path) - k) == 0
+
+
+def test_irrational_constants_cancelling_to_a_singular_model(tmp_path):
+    # without the resistor the net capacitance at 0:a is zero: i = 0 * s e has no solution
+    problem = singular(tmp_path, IRRATIONAL)
+    assert problem.kinds() == ["singular_model"]
