@@ -17,9 +17,9 @@ The system
 What is assumed
     The system is linear, single-input single-output, and at rest (zero state) at the
     first sample time. Its coefficients are the polynomials in c printed in
-    `theta` below: every other parameter is known. Sampled data are interpolated linearly
-    between samples (a first-order hold); pass hold="zoh" for a zero-order hold (each
-    sample held until the next).
+    `theta` below: every other parameter is known. Between samples, the output is
+    interpolated linearly, and so is the input (a first-order hold) unless hold="zoh"
+    says it was held from each sample to the next (a zero-order hold).
 
 How to use it
     import numpy as np
@@ -289,7 +289,7 @@ def _right_hand_side(Theta, c, beta, t, u, y, hold):
     last = len(times) - 2
     slopes = np.diff(np.column_stack([y, u]), axis=0) / np.diff(t)[:, None]
     if hold == "zoh":
-        slopes[:] = 0.0
+        slopes[:, 1] = 0.0  # the input is held; the output, continuous, stays interpolated
     ys, us = y.tolist(), u.tolist()
     y_slopes, u_slopes = slopes.T.tolist()
     scale = 1.0 / c[0]
@@ -383,8 +383,9 @@ def estimate(
     The filter states, k^ and J_2..J_2N are integrated together by scipy's
     adaptive Runge-Kutta solver `method` (RK23, as the paper's ode23) with tolerances rtol
     and atol on every state; max_step bounds its step (pass the sampling interval if the
-    input has features shorter than the solver's steps). Between samples the data are
-    interpolated linearly (hold="linear") or held (hold="zoh").
+    input has features shorter than the solver's steps). Between samples the output is
+    interpolated linearly, and so is the input (hold="linear") unless it was held
+    (hold="zoh", as from a digital-to-analogue converter).
 
     C is the filter (see `filter_polynomial`): None for (1 + s)^(n+1), a time constant T
     for (1 + sT)^(n+1), or coefficients, highest power first. progress, if given, is

@@ -135,8 +135,8 @@ def _entry(theta: Theta, expr: sympy.Expr, symbols: list[sympy.Symbol]) -> str:
 
 
 def _docstring_safe(value: object) -> str:
-    """repr(value) with its double quotes escaped, so that it can sit in a docstring."""
-    return repr(value).replace('"', '\\"')
+    """repr(value), escaped to read as itself inside a (non-raw, triple-quoted) docstring."""
+    return repr(value).replace("\\", "\\\\").replace('"', '\\"')
 
 
 @cache

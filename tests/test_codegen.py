@@ -1,0 +1,250 @@
+"""Generation of the estimator modules: committed bytes, names, numbers, safety, standalone use."""
+
+from __future__ import annotations
+
+import ast
+import dataclasses
+import inspect
+import json
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+import sympy
+
+from mtt import codegen
+from mtt.diagnostics import ModelError
+from mtt.options import ParameterChoice
+from mtt.pipeline import theta_for
+from mtt.theta import Theta
+
+ROOT = Path(__file__).resolve().parent.parent
+k, s, tau, l = sympy.symbols("k s tau l")  # noqa: E741 - the paper's names
+
+# The committed modules and the `mtt compile` options they are made with (see the Makefile).
+COMMITTED = {"dc_drive": (), "absorber": ("tau", "l"), "rlc": ()}
+
+
+def dc_drive_theta(**changes) -> Theta:
+    """Theta of the DC drive as method.md section 5.1 states it, made by hand."""
+    matrix = [[10, 0], [10, 10], [1, 11], [0, 10], [0, 1], [-10, 0], [0, 0], [0, -10]]
+    theta = Theta(
+        model="dc_drive",
+        description="voltage-driven DC motor with a flexible shaft",
+        source_name="dc_drive.bg",
+        input="Se:v",
+        output="Df:vm",
+        unknown="k",
+        symbols=(),
+        defaults={},
+        assumed={"ra": sympy.Integer(1), "ia": sympy.Rational(1, 10)},
+        true_value=sympy.Integer(10),
+        num=10 * k * s**2 + 10,
+        den=k * s**4 + 10 * k * s**3 + (11 * k + 1) * s**2 + (10 * k + 10) * s + 10,
+        n=4,
+        m=2,
+        N=1,
+        matrix=sympy.Matrix(matrix),
+    )
+    return dataclasses.replace(theta, **changes)
+
+
+def absorber_theta(**changes) -> Theta:
+    """Theta of the absorber, eq. (27), with tau and l kept symbolic."""
+    matrix = [
+        [l, l, l, l],
+        [3 * l * tau, 4 * l * tau, 3 * l * tau, 0],
+        [3 * l * tau**2, 3 * l * tau**2, 0, 0],
+        [l * tau**3, 0, 0, 0],
+        [0, 0, 0, -1],
+    ]
+    theta = Theta(
+        model="absorber",
+        description="three-stage absorber",
+        source_name="absorber.bg",
+        input="Sf:feed",
+        output="De:x_l",
+        unknown="k",
+        symbols=("tau", "l"),
+        defaults={"tau": sympy.Integer(2), "l": sympy.Rational(1, 2)},
+        assumed={},
+        true_value=sympy.Rational(18, 25),
+        num=k**3,
+        den=l * ((k + s * tau + 1) * (3 * s * tau + 1) * k + (s * tau + 1) ** 3 + k**3),
+        n=3,
+        m=0,
+        N=3,
+        matrix=sympy.Matrix(matrix),
+    )
+    return dataclasses.replace(theta, **changes)
+
+
+@pytest.mark.parametrize("model", sorted(COMMITTED))
+def test_committed_modules_are_what_mtt_generates(model, monkeypatch):
+    monkeypatch.chdir(ROOT)  # the source is named as the Makefile names it
+    theta = theta_for(f"models/{model}.bg", ParameterChoice(keep=frozenset(COMMITTED[model])))
+    assert codegen.render(theta) == (ROOT / "generated" / f"{model}.py").read_text("utf-8")
+
+
+def test_generation_does_not_depend_on_hash_seeds():
+    program = (
+        "import sys; from mtt import codegen; from mtt.options import ParameterChoice; "
+        "from mtt.pipeline import theta_for; "
+        "choice = ParameterChoice(keep=frozenset({'tau', 'l'})); "
+        "sys.stdout.write(codegen.render(theta_for('models/absorber.bg', choice)))"
+    )
+    env = {**os.environ, "PYTHONHASHSEED": "12345"}
+    done = subprocess.run(
+        [sys.executable, "-c", program], cwd=ROOT, env=env, capture_output=True, text=True
+    )
+    assert done.stdout == (ROOT / "generated" / "absorber.py").read_text("utf-8")
+
+
+def test_theta_of_the_generated_module_is_the_papers():
+    module = codegen.load(absorber_theta())
+    expected = [[0.5] * 4, [3, 4, 3, 0], [6, 6, 0, 0], [4, 0, 0, 0], [0, 0, 0, -1]]
+    np.testing.assert_array_equal(module.theta(), expected)
+    np.testing.assert_array_equal(module.theta(l=1.0, tau=1.0)[1], [3, 4, 3, 0])
+    assert (module.n, module.m, module.N, module.PARAMETERS) == (3, 0, 3, ("tau", "l"))
+    assert module.DEFAULTS == {"tau": 2.0, "l": 0.5} and module.TRUE_VALUE == 0.72
+    dc = codegen.load(dc_drive_theta())
+    np.testing.assert_array_equal(dc.theta(), np.array(dc_drive_theta().matrix, dtype=float))
+    num, den = dc.transfer_function(10.0)
+    np.testing.assert_array_equal(num, [100, 0, 10])
+    np.testing.assert_array_equal(den, [10, 100, 111, 110, 10])
+
+
+def test_numbers_are_printed_exactly_or_as_floats():
+    matrix = absorber_theta().matrix.copy()
+    matrix[0, 0] = tau / 3 - sympy.Rational(7, 2)
+    matrix[0, 1] = sympy.sqrt(2) * l
+    module = codegen.load(absorber_theta(matrix=matrix))
+    source = codegen.render(absorber_theta(matrix=matrix))
+    assert "1 / 3 * p['tau'] - 7 / 2" in source
+    assert module.theta()[0, 0] == 2 / 3 - 7 / 2
+    assert module.theta()[0, 1] == pytest.approx(np.sqrt(2) * 0.5, rel=1e-15)
+
+
+def test_parameter_names_cannot_collide_with_the_modules_own_names():
+    np_, theta_ = sympy.symbols("np theta")
+    matrix = absorber_theta().matrix.subs({tau: np_, l: theta_}, simultaneous=True)
+    changed = absorber_theta(
+        symbols=("np", "theta"),
+        defaults={"np": sympy.Integer(3), "theta": sympy.Integer(2)},
+        matrix=matrix,
+    )
+    module = codegen.load(changed)
+    assert module.theta()[3, 0] == 2 * 3**3
+    assert module.theta(np=1.0)[3, 0] == 2.0
+
+
+def test_kept_parameters_without_a_value_must_be_given():
+    module = codegen.load(absorber_theta(defaults={"tau": None, "l": sympy.Rational(1, 2)}))
+    assert module.DEFAULTS == {"tau": None, "l": 0.5}
+    with pytest.raises(ValueError, match=r"no value for the known parameter 'tau'.*tau=VALUE"):
+        module.theta()
+    assert module.theta(tau=2.0)[3, 0] == 4.0
+
+
+@pytest.mark.parametrize(
+    "changes,kind",
+    [
+        (dict(symbols=("beta", "l")), "reserved_name"),
+        (dict(symbols=("k0", "l")), "reserved_name"),
+        (dict(symbols=("lambda", "l")), "bad_name"),
+        (dict(model="class"), "bad_name"),
+        (dict(unknown="k-1"), "bad_name"),
+        (dict(N=0), "no_dependence"),
+    ],
+)
+def test_names_and_systems_the_generator_refuses(changes, kind):
+    theta = absorber_theta(**changes)
+    if "symbols" in changes:
+        renamed = sympy.Symbol(changes["symbols"][0])
+        theta = dataclasses.replace(
+            theta,
+            defaults={renamed.name: sympy.Integer(2), "l": sympy.Rational(1, 2)},
+            matrix=theta.matrix.subs(tau, renamed),
+        )
+    with pytest.raises(ModelError) as caught:
+        codegen.render(theta)
+    assert caught.value.kinds() == [kind]
+    assert "absorber.bg: error[" in caught.value.render()
+
+
+def test_a_theta_that_is_not_polynomial_in_the_kept_parameters_is_refused():
+    matrix = absorber_theta().matrix.copy()
+    matrix[0, 0] = 1 / tau
+    with pytest.raises(ModelError) as caught:
+        codegen.render(absorber_theta(matrix=matrix))
+    assert caught.value.kinds() == ["unsupported_theta"]
+
+
+def test_reserved_names_cover_the_generated_functions_arguments():
+    module = codegen.load(dc_drive_theta())
+    for function in (module.estimate, module.simulate, module.transfer_function):
+        names = set(inspect.signature(function).parameters) - {"known"}
+        assert names <= codegen.RESERVED, names - codegen.RESERVED
+
+
+def test_model_text_reaches_the_module_only_as_string_literals():
+    hostile = 'x""" + __import__("os").system("false") + """\\ \' \'\'\' end'
+    theta = dc_drive_theta(description=hostile)
+    source = codegen.render(theta)
+    tree = ast.parse(source)
+    assert repr(hostile) in ast.get_docstring(tree, clean=False)
+    module = codegen.load(theta)
+    assert hostile == module.DESCRIPTION
+    calls = [node for node in ast.walk(tree) if isinstance(node, ast.Call)]
+    assert not any(getattr(call.func, "id", None) == "__import__" for call in calls)
+
+
+def test_generated_modules_are_standalone(tmp_path):
+    """Import the committed module where mtt (and sympy, jinja2, ...) cannot be imported."""
+    (tmp_path / "dc_drive.py").write_bytes((ROOT / "generated" / "dc_drive.py").read_bytes())
+    program = f"""
+import json, runpy, sys
+for name in ("mtt", "sympy", "jinja2", "lark", "networkx", "matplotlib"):
+    sys.modules[name] = None  # importing any of them now fails
+sys.path.insert(0, {str(tmp_path)!r})
+import numpy as np
+import dc_drive
+t = np.linspace(0.0, 10.0, 1001)
+u = np.ones_like(t)
+y = dc_drive.simulate(t, u, 10.0)
+np.savetxt("data.csv", np.column_stack([t, u, y]), delimiter=",", header="t,u,y", comments="")
+result = dc_drive.estimate(t, u, y, k0=5.0)
+print(json.dumps({{"k": result.k, "ok": result.ok}}))
+sys.argv = ["dc_drive.py", "data.csv", "--k0", "0", "20", "--json"]
+try:
+    runpy.run_path({str(tmp_path / "dc_drive.py")!r}, run_name="__main__")
+except SystemExit as exit:
+    assert exit.code == 0, exit.code
+"""
+    done = subprocess.run(
+        [sys.executable, "-I", "-c", program], cwd=tmp_path, capture_output=True, text=True
+    )
+    assert done.returncode == 0, done.stderr
+    api, script = (json.loads(line) for line in done.stdout.splitlines())
+    assert api["ok"] and abs(api["k"] - 10.0) < 0.1
+    assert [run["k0"] for run in script["runs"]] == [0.0, 20.0]
+    assert all(abs(run["k"] - 10.0) < 0.1 for run in script["runs"])
+
+
+def test_write_atomic_replaces_whole_files_or_nothing(tmp_path, monkeypatch):
+    target = tmp_path / "module.py"
+    codegen.write_atomic(target, "old\n")
+    codegen.write_atomic(target, "new\n")
+    assert target.read_text() == "new\n"
+
+    def refuse(*_):
+        raise OSError(28, "No space left on device")
+
+    monkeypatch.setattr(os, "replace", refuse)
+    with pytest.raises(OSError):
+        codegen.write_atomic(target, "partial")
+    assert target.read_text() == "new\n"
+    assert [path.name for path in tmp_path.iterdir()] == ["module.py"]

@@ -1,0 +1,222 @@
+"""The generated estimator's algorithm, checked against independent computations.
+
+The modules under test are the committed ones in generated/ (test_codegen checks that they
+are what mtt generates today), imported as a user imports them.
+"""
+
+from __future__ import annotations
+
+import importlib.util
+import math
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+from numpy.polynomial import Polynomial
+from scipy import integrate, signal
+
+ROOT = Path(__file__).resolve().parent.parent
+
+
+def _import(name: str):
+    spec = importlib.util.spec_from_file_location(
+        f"generated_{name}", ROOT / "generated" / f"{name}.py"
+    )
+    module = importlib.util.module_from_spec(spec)
+    sys.modules[spec.name] = module
+    spec.loader.exec_module(module)
+    return module
+
+
+@pytest.fixture(scope="module")
+def dc_drive():
+    return _import("dc_drive")
+
+
+@pytest.fixture(scope="module")
+def absorber():
+    return _import("absorber")
+
+
+def step(t_end: float, dt: float = 0.01) -> tuple[np.ndarray, np.ndarray]:
+    t = np.linspace(0.0, t_end, round(t_end / dt) + 1)
+    return t, np.ones_like(t)
+
+
+@pytest.fixture(scope="module")
+def noisy_absorber(absorber):
+    """The paper's absorber data: k = 0.72, unit step, 4 s, noise uniform in +-0.02."""
+    t, u = step(4.0)
+    y = absorber.simulate(t, u, 0.72) + np.random.default_rng(0).uniform(-0.02, 0.02, t.size)
+    return t, u, y
+
+
+def exact_cost(module, t, u, y, *, k0, beta, S0, C, upto: int, refine: int = 10) -> Polynomial:
+    """J(k, t[upto]) as a polynomial in k, from the definition (method.md section 3).
+
+    The filtered data come from scipy's exact first-order-hold simulation of s^i/C(s) on a
+    grid `refine` times finer than the samples (the interpolated data are piecewise linear,
+    so this is exact), and the weighted integral from Simpson's rule on that grid.
+    """
+    fine = np.linspace(t[0], t[upto], upto * refine + 1)
+    c = module.filter_polynomial(C)
+    rows = []
+    for signal_samples, degree in ((y, module.n), (u, module.m)):
+        data = np.interp(fine, t, signal_samples)
+        for i in range(degree + 1):
+            numerator = np.r_[1.0, np.zeros(i)]  # s^i
+            rows.append(signal.lsim((numerator, c), data, fine)[1])
+    phi = module.theta().T @ np.array(rows)  # g(k, tau) = sum_j phi_j(tau) k^j
+    weight = np.exp(-beta * (fine[-1] - fine))
+    square = [
+        sum(phi[a] * phi[power - a] for a in range(len(phi)) if 0 <= power - a < len(phi))
+        for power in range(2 * len(phi) - 1)
+    ]
+    integral = [integrate.simpson(weight * q, x=fine) for q in square]
+    prior = 0.5 * math.exp(-beta * fine[-1]) * S0 * Polynomial([-k0, 1.0]) ** 2
+    return prior + 0.5 * Polynomial(integral)
+
+
+@pytest.mark.parametrize("name", ["dc_drive", "absorber"])
+def test_J_i_are_the_derivatives_of_the_exact_cost_and_khat_is_stationary(
+    name, dc_drive, absorber, noisy_absorber
+):
+    module = {"dc_drive": dc_drive, "absorber": absorber}[name]
+    if name == "absorber":
+        t, u, y = noisy_absorber
+        k0 = 1.0
+    else:
+        t, u = step(6.0)
+        y = dc_drive.simulate(t, u, 10.0)
+        k0 = 5.0
+    settings = dict(k0=k0, beta=0.1, S0=1e-4, C=None)
+    result = module.estimate(t, u, y, **settings, rtol=1e-9, atol=1e-12)
+    assert result.ok
+    for upto in (t.size // 3, t.size - 1):  # during the transient and at the end
+        cost = exact_cost(module, t, u, y, **settings, upto=upto)
+        khat = result.khat[upto]
+        J = [cost.deriv(i)(khat) for i in range(1, 2 * module.N + 1)]
+        np.testing.assert_allclose(result.J[:, upto], J[1:], rtol=2e-5)
+        assert abs(J[0] / J[1]) < 1e-6  # J_1 = 0: a Newton step from khat goes nowhere
+
+
+def test_dc_drive_converges_from_the_papers_three_starting_values(dc_drive):
+    t, u = step(10.0)
+    y = dc_drive.simulate(t, u, 10.0)
+    for k0 in (0.0, 5.0, 20.0):
+        result = dc_drive.estimate(t, u, y, k0=k0, beta=0.1, S0=1e-4, C=[1, 5, 10, 10, 5, 1])
+        assert result.ok and abs(result.k - 10.0) < 0.1, (k0, result.k)
+        assert result.minima() == pytest.approx([result.k])
+
+
+def test_absorber_local_minima_and_cost(absorber, noisy_absorber):
+    result = absorber.estimate(*noisy_absorber, k0=1.0)
+    minima = result.minima()
+    assert minima == pytest.approx([-0.23, 0.72], abs=0.03)
+    # every local minimum of the polynomial, as a dense grid sees it
+    k = np.linspace(-2.0, 2.0, 40001)
+    J = result.cost(k)
+    grid = k[1:-1][(J[1:-1] < J[:-2]) & (J[1:-1] < J[2:])]
+    assert grid == pytest.approx(minima, abs=1e-3)
+    assert result.cost(result.k) == pytest.approx(0.0, abs=1e-15)
+    assert result.cost(np.array([[0.0, 0.5]])).shape == (1, 2)
+    assert np.all(J >= -1e-15)  # k^ is the global minimum
+
+
+@pytest.mark.parametrize("hold,interp", [("linear", True), ("zoh", False)])
+def test_simulate_is_exact_for_its_hold(dc_drive, hold, interp):
+    t = np.linspace(0.0, 5.0, 251)
+    u = np.sin(3 * t) + (t > 1.0)
+    expected = signal.lsim(dc_drive.transfer_function(10.0), u, t, interp=interp)[1]
+    assert dc_drive.simulate(t, u, 10.0, hold=hold) == pytest.approx(expected, abs=1e-12)
+    # irregular sampling: the same piecewise-linear input seen on a subset of the samples
+    keep = np.r_[0, np.sort(np.random.default_rng(1).choice(np.arange(1, 250), 80, False)), 250]
+    coarse = dc_drive.simulate(t[keep], u[keep], 10.0)
+    fine = dc_drive.simulate(t, np.interp(t, t[keep], u[keep]), 10.0)
+    assert coarse == pytest.approx(fine[keep], abs=1e-12)
+
+
+def test_transfer_function_is_theta_times_powers_of_k(absorber):
+    num, den = absorber.transfer_function(0.72, tau=2.0, l=0.5)
+    k = 0.72
+    assert num == pytest.approx([k**3])
+    expected = [4, 6 * (1 + k), 3 + 4 * k + 3 * k**2, 0.5 * (1 + k + k**2 + k**3)]
+    assert den == pytest.approx(expected)
+    assert absorber.theta(tau=1.0, l=1.0)[1] == pytest.approx([3, 4, 3, 0])
+
+
+def test_zero_order_hold_and_other_solvers(dc_drive):
+    t, u = step(10.0, dt=0.05)
+    u = np.where(t < 5.0, 1.0, -1.0)
+    y = dc_drive.simulate(t, u, 10.0, hold="zoh")
+    zoh = dc_drive.estimate(t, u, y, k0=5.0, hold="zoh")
+    assert zoh.ok and abs(zoh.k - 10.0) < 0.01
+    # the same ODE, whichever solver: agreement to the tolerance asked for
+    tight = dict(k0=5.0, hold="zoh", rtol=1e-9, atol=1e-12)
+    rk23, rk45 = (dc_drive.estimate(t, u, y, method=m, **tight) for m in ("RK23", "RK45"))
+    assert rk45.k == pytest.approx(rk23.k, abs=1e-6)
+    assert zoh.k == pytest.approx(rk23.k, abs=1e-5)
+
+
+def test_progress_reports_the_time_reached(dc_drive):
+    t, u = step(2.0)
+    times = []
+    dc_drive.estimate(t, u, dc_drive.simulate(t, u, 10.0), k0=5.0, progress=times.append)
+    assert times == sorted(times) and times[-1] == 2.0
+
+
+def test_a_run_that_leaves_the_convex_region_stops_and_says_where(absorber):
+    t, u = step(4.0)
+    y = absorber.simulate(t, u, 0.72)
+    result = absorber.estimate(t, u, y, k0=0.2)  # the cost is concave there for a while
+    assert not result.ok
+    assert "J_2 reached zero" in result.message
+    assert 0 < result.stopped_at < 4.0
+    assert f"t = {result.stopped_at:.6g}" in result.message
+    assert result.t[-1] < result.stopped_at and result.t.size < t.size
+    assert np.all(np.isfinite(result.khat)) and np.all(result.J[0] > 0)
+    assert math.isfinite(result.k)
+
+
+BAD_INPUTS = [
+    (dict(y=[0.0, np.nan, 0.0]), r"y\[1\] is nan: every value must be finite"),
+    (dict(u=[0.0, np.inf, 0.0]), r"u\[1\] is inf"),
+    (dict(y=[0.0, 0.0]), r"must have the same length, not \[3, 3, 2\]"),
+    (dict(t=[0.0, 1.0, 1.0]), r"strictly increasing: t\[2\] = 1.0 follows t\[1\] = 1.0"),
+    (dict(t=[0.0], u=[1.0], y=[0.0]), r"need at least 2 samples, not 1"),
+    (dict(y=[[0.0, 0.0, 0.0]]), r"one-dimensional"),
+    (dict(y=[0j, 1j, 0j]), r"must be real"),
+    (dict(y=["a", "b", "c"]), r"array of real numbers"),
+    (dict(C=[1.0, -1.0, 1.0, 1.0, 1.0, 1.0]), r"C\(s\) is not stable: it has a root at s ="),
+    (dict(C=[1.0, 4.0, 6.0, 4.0, 1.0]), r"C\(s\) has degree 4; it must exceed .* \(n = 4, m = 2\)"),
+    (dict(C=-2.0), r"the filter time constant T must be > 0"),
+    (dict(S0=0.0), r"S0 must be > 0, not 0.0"),
+    (dict(S0=-1e-4), r"S0 must be > 0"),
+    (dict(beta=-0.1), r"beta must be >= 0, not -0.1"),
+    (dict(k0=math.nan), r"k0 must be finite"),
+    (dict(k0="x"), r"k0 must be a real number"),
+    (dict(rtol=0.0), r"rtol must be > 0"),
+    (dict(hold="cubic"), r"hold must be one of 'linear', 'zoh', not 'cubic'"),
+    (dict(method="LSODA"), r"method must be one of 'RK23', 'RK45', 'DOP853'"),
+    (dict(tau=2.0), r"unexpected parameter 'tau' .*: none"),
+]
+
+
+@pytest.mark.parametrize("change,message", BAD_INPUTS)
+def test_bad_input_is_a_clear_value_error(dc_drive, change, message):
+    arguments = dict(t=[0.0, 1.0, 2.0], u=[1.0, 1.0, 1.0], y=[0.0, 0.1, 0.2], k0=1.0)
+    arguments.update(change)
+    with pytest.raises(ValueError, match=message):
+        dc_drive.estimate(**arguments)
+
+
+def test_bad_input_to_the_other_functions(dc_drive, absorber):
+    with pytest.raises(ValueError, match=r"t must be strictly increasing"):
+        dc_drive.simulate([0.0, 2.0, 1.0], [1.0, 1.0, 1.0], 10.0)
+    with pytest.raises(ValueError, match=r"k must be finite"):
+        dc_drive.transfer_function(math.inf)
+    with pytest.raises(ValueError, match=r"tau must be finite"):
+        absorber.theta(tau=math.nan)
+    with pytest.raises(ValueError, match=r"unexpected parameter 'L'.*: tau, l"):
+        absorber.simulate([0.0, 1.0], [1.0, 1.0], 0.72, L=0.5)
