@@ -100,6 +100,7 @@ def theta(**known: float) -> np.ndarray:
 HOLDS = ("linear", "zoh")  # input interpolation between samples
 METHODS = ("RK23", "RK45", "DOP853")  # scipy's adaptive explicit Runge-Kutta solvers
 FACTORIALS = [math.factorial(i) for i in range(2 * N + 1)]
+HALF_FACTORIALS = [0.5 * factorial for factorial in FACTORIALS]
 
 
 def _real(name: str, value) -> float:
@@ -257,16 +258,19 @@ def filter_polynomial(C=None) -> np.ndarray:
 
 
 def _half_square_derivatives(phi: list[float], k: float) -> list[float]:
-    """h_i = 1/2 d^i(g^2)/dk^i at k, i = 0..2N, for the error g(k) = sum_j phi_j k^j."""
-    square = [0.0] * (2 * len(phi) - 1)  # coefficients of g^2: phi convolved with itself
-    for i, left in enumerate(phi):
-        for j, right in enumerate(phi):
+    """h_i = 1/2 d^i(g^2)/dk^i at k, i = 0..2N, for the error g(k) = sum_j phi_j k^j.
+
+    Plain floats: for these few numbers, numpy's per-call overhead would dominate.
+    """
+    g = phi  # becomes the Taylor coefficients of g around k (repeated synthetic division)
+    for low in range(N):
+        for i in range(N - 1, low - 1, -1):
+            g[i] += k * g[i + 1]
+    square = [0.0] * (2 * N + 1)  # Taylor coefficients of g^2 around k
+    for i, left in enumerate(g):
+        for j, right in enumerate(g):
             square[i + j] += left * right
-    # Taylor coefficients of g^2 around k (repeated synthetic division by (x - k))
-    for low in range(len(square) - 1):
-        for i in range(len(square) - 2, low - 1, -1):
-            square[i] += k * square[i + 1]
-    return [0.5 * FACTORIALS[i] * coefficient for i, coefficient in enumerate(square)]
+    return [half * coefficient for half, coefficient in zip(HALF_FACTORIALS, square)]
 
 
 def _right_hand_side(Theta, c, beta, t, u, y, hold):
@@ -305,12 +309,13 @@ def _right_hand_side(Theta, c, beta, t, u, y, hold):
         dx = linear @ x
         dx[top_y] += (ys[j] + offset * y_slopes[j]) * scale
         dx[top_u] += (us[j] + offset * u_slopes[j]) * scale
-        h = _half_square_derivatives((x[:filters] @ padded).tolist(), x[khat])
-        J = x[khat + 1 :].tolist()  # J_2..J_2N
+        estimate, *J = x[khat:].tolist()  # k^, J_2..J_2N
+        h = _half_square_derivatives((x[:filters] @ padded).tolist(), estimate)
         rate = -h[1] / J[0]  # dk^/dt = -h_1 / J_2
         dx[khat] = rate
+        J.append(0.0)  # J_(2N+1)
         for i in range(2 * N - 1):  # dJ_i/dt = -beta J_i + h_i + J_(i+1) dk^/dt
-            dx[khat + 1 + i] += h[i + 2] + (J[i + 1] * rate if i < 2 * N - 2 else 0.0)
+            dx[khat + 1 + i] += h[i + 2] + J[i + 1] * rate
         return dx
 
     return rhs, size, khat
@@ -414,8 +419,14 @@ def estimate(
     track = np.empty((t.size, 2 * N))  # k^, J_2..J_2N at the sample times
     track[0] = x0[khat:]
     times = t.tolist()
-    done, stop = 1, None
-    while solver.status == "running":
+    done, stop = 1, None  # samples recorded; why and when the run stopped early
+    while done < t.size:
+        # End each step on a sample time where the step size allows: the interpolated data
+        # have a kink at every sample, and a step across one is either inaccurate or
+        # rejected. scipy's solvers take no breakpoints, so move the bound they step to.
+        reach = bisect_right(times, solver.t + solver.h_abs) - 1
+        solver.t_bound = times[max(reach, done)]
+        solver.status = "running"
         failure = solver.step()
         if failure is not None:
             stop = (solver.t, f"the integrator failed at t = {solver.t:.6g}: {failure}")
@@ -428,9 +439,11 @@ def estimate(
             )
         # record the samples this step covered (before the stop, if there is one)
         upto = bisect_right(times, solver.t) if stop is None else bisect_left(times, stop[0])
-        if upto > done:
+        if upto == done + 1 and times[done] == solver.t:  # the usual case: one, at the end
+            track[done] = solver.y[khat:]
+        elif upto > done:
             track[done:upto] = solver.dense_output()(t[done:upto])[khat:].T
-            done = upto
+        done = max(done, upto)
         if stop is not None:
             break
         if progress is not None:
