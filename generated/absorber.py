@@ -68,7 +68,10 @@ INPUT = 'Sf:feed'
 OUTPUT = 'De:x_l'
 UNKNOWN = 'k'  # called k in this module's API
 TRUE_VALUE = 0.72  # the model file's value of the unknown, for simulations
-TRANSFER_FUNCTION = '(k**3)/(k**3*l + 3*k**2*l*s*tau + k**2*l + 3*k*l*s**2*tau**2 + 4*k*l*s*tau + k*l + l*s**3*tau**3 + 3*l*s**2*tau**2 + 3*l*s*tau + l)'
+TRANSFER_FUNCTION = (
+    '(k**3)/(k**3*l + 3*k**2*l*s*tau + k**2*l + 3*k*l*s**2*tau**2 + 4*k*l*s*tau '
+    '+ k*l + l*s**3*tau**3 + 3*l*s**2*tau**2 + 3*l*s*tau + l)'
+)
 n, m, N = 3, 0, 3  # degree of A(s), degree of B(s), degree of theta in k
 PARAMETERS = ('tau', 'l')  # known parameters kept symbolic
 DEFAULTS = {'tau': 2.0, 'l': 0.5}  # their values in the model file
@@ -269,7 +272,7 @@ def _half_square_derivatives(phi: list[float], k: float) -> list[float]:
     for i, left in enumerate(g):
         for j, right in enumerate(g):
             square[i + j] += left * right
-    return [half * coefficient for half, coefficient in zip(HALF_FACTORIALS, square)]
+    return [half * value for half, value in zip(HALF_FACTORIALS, square, strict=True)]
 
 
 def _right_hand_side(Theta, c, beta, t, u, y, hold):
@@ -531,7 +534,7 @@ def main(argv: list[str] | None = None) -> int:
         return 2
     records = [
         dict(k0=k0, k=run.k, minima=run.minima().tolist(), ok=run.ok, message=run.message)
-        for k0, run in zip(args.k0, runs)
+        for k0, run in zip(args.k0, runs, strict=True)
     ]
     if args.json:
         print(json.dumps(dict(model=MODEL, unknown=UNKNOWN, runs=records)))

@@ -78,7 +78,7 @@ def theta(**known: float) -> np.ndarray:
     Rows are a0..an (the denominator A(s)) then -b0..-bm (minus the numerator B(s));
     column j holds the coefficients of k^j.
     """
-    _known_values(known)
+    _known_values(known)  # none kept symbolic: rejects any
     return np.array(
         [
             [2, 0],  # a0
@@ -267,7 +267,7 @@ def _half_square_derivatives(phi: list[float], k: float) -> list[float]:
     for i, left in enumerate(g):
         for j, right in enumerate(g):
             square[i + j] += left * right
-    return [half * coefficient for half, coefficient in zip(HALF_FACTORIALS, square)]
+    return [half * value for half, value in zip(HALF_FACTORIALS, square, strict=True)]
 
 
 def _right_hand_side(Theta, c, beta, t, u, y, hold):
@@ -529,7 +529,7 @@ def main(argv: list[str] | None = None) -> int:
         return 2
     records = [
         dict(k0=k0, k=run.k, minima=run.minima().tolist(), ok=run.ok, message=run.message)
-        for k0, run in zip(args.k0, runs)
+        for k0, run in zip(args.k0, runs, strict=True)
     ]
     if args.json:
         print(json.dumps(dict(model=MODEL, unknown=UNKNOWN, runs=records)))

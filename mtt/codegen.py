@@ -139,6 +139,19 @@ def _docstring_safe(value: object) -> str:
     return repr(value).replace("\\", "\\\\").replace('"', '\\"')
 
 
+def _literal(text: str | None, width: int = 76) -> str:
+    """A Python literal for `text`: repr'd pieces, one per line when it is long."""
+    if text is None or len(text) <= width:
+        return repr(text)
+    pieces = []
+    while len(text) > width:
+        cut = text.rfind(" ", 0, width) + 1 or width
+        pieces.append(text[:cut])
+        text = text[cut:]
+    pieces.append(text)
+    return "(\n" + "".join(f"    {piece!r}\n" for piece in pieces) + ")"
+
+
 @cache
 def _environment() -> jinja2.Environment:
     environment = jinja2.Environment(
@@ -149,6 +162,7 @@ def _environment() -> jinja2.Environment:
     )
     environment.filters["repr"] = repr
     environment.filters["doc"] = _docstring_safe
+    environment.filters["literal"] = _literal
     return environment
 
 

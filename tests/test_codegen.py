@@ -191,7 +191,7 @@ def test_reserved_names_cover_the_generated_functions_arguments():
 
 
 def test_model_text_reaches_the_module_only_as_string_literals():
-    hostile = 'x""" + __import__("os").system("false") + """\\ \' \'\'\' end'
+    hostile = 'x""" + __import__("os").system("false") + """\\ \' \'\'\' end ' * 3
     theta = dc_drive_theta(description=hostile)
     source = codegen.render(theta)
     tree = ast.parse(source)
