@@ -11,8 +11,8 @@ the final estimates of a very tight run (the generated module at rtol 1e-10). Th
 reference is timed at the generated module's tolerance and then, if it is less accurate,
 at tighter tolerances until it is at least as accurate: "equal accuracy" is that time.
 
-    .venv/bin/python bench/estimate.py          # all, about two minutes
-    .venv/bin/python bench/estimate.py --quick  # 10^4 instead of 10^5 samples
+    .venv/bin/python bench/estimate.py          # all: ten minutes, mostly the reference
+    .venv/bin/python bench/estimate.py --quick  # 10^4 instead of 10^5 samples: one minute
 """
 
 from __future__ import annotations

@@ -308,8 +308,8 @@ def _record(module: ModuleType, runs: list[Run]) -> dict:
 def _table(module: ModuleType, data: Data, runs: list[Run]) -> str:
     rows = [("k0", "C(s)", f"{module.UNKNOWN} at t = {data.t[-1]:g}", "local minima of J")]
     for run in runs:
-        minima = ", ".join(f"{value:.5g}" for value in run.result.minima())
-        final = f"{run.result.k:.5g}" + ("" if run.result.ok else " (stopped)")
+        minima = ", ".join(f"{value:.6g}" for value in run.result.minima())
+        final = f"{run.result.k:.6g}" + ("" if run.result.ok else " (stopped)")
         rows.append((f"{run.k0:g}", run.filter, final, minima))
     widths = [max(len(row[i]) for row in rows) for i in range(len(rows[0]))]
     lines = [f"{module.MODEL}: {data.note}"]
