@@ -165,10 +165,7 @@ def _labels(runs: list[Run]) -> list[str]:
 
 def _cost_range(runs: list[Run], data: Data, given: list[float] | None) -> tuple[float, float]:
     if given is not None:
-        low, high = given
-        if not low < high:
-            raise UsageError(f"--cost-range needs A < B, not {low:g} {high:g}")
-        return low, high
+        return given[0], given[1]
     points = [run.k0 for run in runs] + [value for run in runs for value in run.result.minima()]
     points += [] if data.k is None else [data.k]
     low, high = min(points), max(points)
@@ -243,6 +240,9 @@ def cmd_simulate(args) -> int:
 def cmd_estimate(args) -> int:
     from mtt import plots  # matplotlib takes a quarter second to import: only plotting pays
 
+    if args.cost_range and not args.cost_range[0] < args.cost_range[1]:
+        low, high = args.cost_range
+        raise UsageError(f"--cost-range needs A < B, not {low:g} {high:g}")
     module = _model(args)
     data = experiment_data(module, args)
     runs = run_all(module, data, args)
