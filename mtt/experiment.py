@@ -185,7 +185,12 @@ def _csv_text(header: list[str], rows) -> str:
 
 
 def _model(args) -> ModuleType:
-    return codegen.load(pipeline.theta_for(args.file, choice_from_args(args)))
+    module = codegen.load(pipeline.theta_for(args.file, choice_from_args(args)))
+    missing = [name for name, value in module.DEFAULTS.items() if value is None]
+    if missing:
+        name = missing[0]
+        raise UsageError(f"the model gives no value for {name}: pass --set {name}=VALUE")
+    return module
 
 
 def _guarded(action: Callable[[argparse.Namespace], int]) -> Callable[[argparse.Namespace], int]:

@@ -63,6 +63,15 @@ def test_compile_errors_are_messages(tmp_path, capsys):
     assert status == 2 and "error[io]" in err
 
 
+def test_parameters_without_a_value_are_asked_for(tmp_path, capsys):
+    model = tmp_path / "rlc.bg"
+    model.write_text((ROOT / "models" / "rlc.bg").read_text().replace("param r = 2", "param r"))
+    status, _, err = mtt(capsys, "estimate", str(model), "--k0", "0.2")
+    assert status == 2 and "the model gives no value for r: pass --set r=VALUE" in err
+    result = estimates(capsys, str(model), "--k0", "0.2", "--set", "r=2", "--t-end", "3")
+    assert abs(result["runs"][0]["k"] - 0.1) < 1e-3
+
+
 def test_dc_drive_fig2_numbers(capsys):
     result = estimates(
         capsys, DC_DRIVE, "--t-end", "10", *PAPER, "--filter", "(1+s)^5", "--k0", "0", "5", "20"
