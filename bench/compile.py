@@ -38,7 +38,7 @@ def ladder(stages: int) -> str:
     lines = [f"model ladder{stages}", "param r = 1", "param c = 1/2", "unknown k = 2", ""]
     lines.append("Se:v -> 1:s1")
     for i in range(1, stages + 1):
-        capacitor = "C:c%d(k)" % i if i == stages else "C:c%d(c)" % i
+        capacitor = f"C:c{i}(k)" if i == stages else f"C:c{i}(c)"
         lines += [f"1:s{i} -> R:r{i}(r)", f"1:s{i} -> 0:n{i}", f"0:n{i} -> {capacitor}"]
         if i < stages:
             lines.append(f"0:n{i} -> 1:s{i + 1}")

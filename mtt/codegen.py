@@ -10,6 +10,7 @@ is safe to run, and the same Theta always gives the same bytes.
 
 from __future__ import annotations
 
+import importlib.util
 import keyword
 import os
 import re
@@ -244,18 +245,23 @@ def write_atomic(path: str | Path, data: str | bytes) -> None:
 
 
 def load(theta: Theta) -> types.ModuleType:
-    """The generated module for `theta`, built in memory: what `mtt simulate/estimate` run.
+    """The generated module for `theta`, imported: what `mtt simulate/estimate` run.
 
     The source is the same text `mtt compile` writes (see the module docstring for why
-    running it is safe); it is registered in sys.modules, as an import would, so that its
-    dataclass can find its own module.
+    running it is safe). It is written to a temporary directory and imported from there
+    by the standard import machinery, as a user's `import` of a compiled module would be,
+    and registered in sys.modules so that its dataclass can find its own module.
     """
     name = f"_mtt_generated_{theta.model}"
-    module = types.ModuleType(name)
-    sys.modules[name] = module
-    try:
-        exec(compile(render(theta), f"<mtt generated {theta.model}>", "exec"), module.__dict__)
-    except BaseException:
-        del sys.modules[name]
-        raise
+    with tempfile.TemporaryDirectory(prefix="mtt-") as directory:
+        path = Path(directory) / f"{name}.py"
+        path.write_text(render(theta), encoding="utf-8")
+        spec = importlib.util.spec_from_file_location(name, path)
+        module = importlib.util.module_from_spec(spec)
+        sys.modules[name] = module
+        try:
+            spec.loader.exec_module(module)
+        except BaseException:
+            del sys.modules[name]
+            raise
     return module
