@@ -20,8 +20,10 @@ from mtt.codegen import write_atomic
 
 
 def _hat(name: str) -> str:
-    """The estimate of `name`, written with a circumflex (over its last letter)."""
-    return name + "\u0302"
+    """The estimate of `name`, with a hat, in matplotlib's mathtext (names are identifiers;
+    a combining circumflex does not render in matplotlib's default font)."""
+    escaped = name.replace("_", r"\_")
+    return rf"$\hat{{{escaped}}}$"
 
 
 @dataclass(frozen=True)
