@@ -230,7 +230,6 @@ def make_parser() -> argparse.ArgumentParser:
     show.add_argument("file", metavar="FILE")
     show.add_argument("--unknown", metavar="NAME", help="the parameter to identify")
     show.set_defaults(run=cmd_show)
-    experiment.register(commands)
 
     causality = commands.add_parser(
         "causality",
@@ -256,6 +255,8 @@ def make_parser() -> argparse.ArgumentParser:
         if name != "ss":
             command.add_argument("--json", action="store_true", help="print one JSON object")
         command.set_defaults(run=run)
+
+    experiment.register(commands)
     return parser
 
 
