@@ -7,7 +7,9 @@ detectors, then preferred (integral) causality of C and I one at a time, then an
 arbitrary causality for any resistor still free, propagating the consequences
 through junctions, TF and GY after each choice. A storage element forced into
 derivative causality is a dependent state; each arbitrary resistor choice marks an
-algebraic loop. Two elements imposing the same variable is a `causal_conflict`.
+algebraic loop. When a choice leads to a conflict later, the procedure backtracks to try
+the other causality, so a causal assignment is found whenever one exists. Two elements
+imposing the same variable (no assignment at all) is a `causal_conflict`.
 """
 
 from __future__ import annotations
@@ -19,6 +21,10 @@ from types import MappingProxyType
 from mtt.bondgraph import BondGraph, Component
 from mtt.components import CausalKind, PortRule, Role
 from mtt.diagnostics import ModelError, error
+
+# Backtracking over free causal choices gives up (with the first conflict) after this many
+# failed attempts: the search is exponential in the worst case.
+MAX_TRIALS = 10_000
 
 
 @dataclass(frozen=True)
@@ -46,6 +52,12 @@ class _Conflict(Exception):
         self.component = component
 
 
+def _model_error(graph: BondGraph, conflict: _Conflict) -> ModelError:
+    return ModelError(
+        graph.source, [error("causal_conflict", str(conflict), conflict.component.position)]
+    )
+
+
 class _Assignment:
     """A partial causal assignment, propagated to a fixed point after every choice."""
 
@@ -54,10 +66,12 @@ class _Assignment:
         self.effort_from: dict[int, str] = {}
         self.cause: dict[int, str] = {}  # bond -> the component whose choice set it
         self.choosing = ""
+        self.chosen: tuple[str, ...] = ()  # components whose causality was a free choice
 
     def copy(self) -> _Assignment:
         other = _Assignment(self.graph)
         other.effort_from, other.cause = dict(self.effort_from), dict(self.cause)
+        other.chosen = self.chosen
         return other
 
     def _conflict(self, bonds: list[int], what: str, claimant: str) -> _Conflict:
@@ -147,51 +161,72 @@ def assign(graph: BondGraph) -> CausalBondGraph:
         try:
             state.choose(component.name, port, component.type.causality.imposes_effort)
         except _Conflict as conflict:
-            raise ModelError(
-                graph.source, [error("causal_conflict", str(conflict), conflict.component.position)]
-            ) from None
+            raise _model_error(graph, conflict) from None
 
-    dependent, loops = [], []
-    for role in (Role.STORAGE, Role.RESISTOR):
-        for component in by_role[role]:
-            port = graph.ports(component.name)[0].bond
-            if state.imposes(component.name, port) is None:
-                preferred = component.type.causality.imposes_effort
-                preferred = True if preferred is None else preferred
-                state = _choose_either(state, component, port, preferred)
-                if role is Role.RESISTOR:
-                    loops.append(component.name)
-            if role is Role.STORAGE and (
-                state.imposes(component.name, port) != component.type.causality.imposes_effort
-            ):
-                dependent.append(component.name)
-
-    for bond in graph.bonds:  # bonds between junctions and two-ports only, if any
-        if bond.number not in state.effort_from:
-            state = _choose_either(state, graph.component(bond.tail), bond.number, True)
-
+    state = _complete(state, _decisions(graph, by_role))
+    dependent = tuple(
+        c.name
+        for c in by_role[Role.STORAGE]
+        if state.imposes(c.name, graph.ports(c.name)[0].bond) != c.type.causality.imposes_effort
+    )
     return CausalBondGraph(
         graph,
         MappingProxyType(dict(sorted(state.effort_from.items()))),
-        tuple(dependent),
-        tuple(loops),
+        dependent,
+        tuple(c for c in state.chosen if graph.component(c).type.role is Role.RESISTOR),
     )
 
 
-def _choose_either(
-    state: _Assignment, component: Component, bond: int, preferred: bool
-) -> _Assignment:
-    """Try the preferred causality, else the other one; conflict if neither can be completed."""
-    for imposes_effort in (preferred, not preferred):
-        trial = state.copy()
-        try:
-            trial.choose(component.name, bond, imposes_effort)
-            return trial
-        except _Conflict as conflict:
-            last = conflict
-    raise ModelError(
-        state.graph.source, [error("causal_conflict", str(last), last.component.position)]
-    )
+def _decisions(graph: BondGraph, by_role: dict) -> list[tuple[str, int, bool]]:
+    """The free choices, in the order of the procedure: (component, bond, preferred causality).
+
+    Storage prefers integral causality; a resistor has no preference (imposing its effort,
+    e = r f, is tried first, as it also suits r = 0); then any bond left between junctions
+    and two-ports.
+    """
+    choices = [
+        (c.name, graph.ports(c.name)[0].bond, c.type.causality.imposes_effort is not False)
+        for c in by_role[Role.STORAGE] + by_role[Role.RESISTOR]
+    ]
+    return choices + [(b.tail, b.number, True) for b in graph.bonds]
+
+
+def _complete(state: _Assignment, decisions: list[tuple[str, int, bool]]) -> _Assignment:
+    """Make the decisions in order, preferred causality first, backtracking on a conflict.
+
+    The sequential procedure alone can paint itself into a corner (a choice that only a
+    later conflict shows to be wrong); backtracking finds an assignment whenever one exists
+    (within `MAX_TRIALS` attempts) and otherwise reports the first conflict met, which is
+    the one the sequential procedure reports.
+    """
+    graph = state.graph
+    conflicts: list[_Conflict] = []
+    # one frame per decision taken: the state before it, its index, the values left to try
+    frames: list[tuple[_Assignment, int, list[bool]]] = []
+    index = 0
+    while True:
+        while index < len(decisions) and state.imposes(*decisions[index][:2]) is not None:
+            index += 1
+        if index == len(decisions):
+            return state
+        frames.append((state, index, [decisions[index][2], not decisions[index][2]]))
+        state = None
+        while frames and state is None and len(conflicts) <= MAX_TRIALS:
+            before, at, values = frames[-1]
+            if not values:
+                frames.pop()
+                continue
+            component, bond, _ = decisions[at]
+            trial = before.copy()
+            try:
+                trial.choose(component, bond, values.pop(0))
+            except _Conflict as conflict:
+                conflicts.append(conflict)
+                continue
+            trial.chosen = before.chosen + (component,)
+            state, index = trial, at + 1
+        if state is None:
+            raise _model_error(graph, conflicts[0])
 
 
 def describe(causal: CausalBondGraph) -> str:

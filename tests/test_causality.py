@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import itertools
+import random
 from pathlib import Path
 
 import pytest
@@ -243,3 +245,81 @@ def test_shorted_network_transfer_function(tmp_path):
     tf = transfer_for(path)
     assert (tf.numerator, tf.denominator) == (1, 2)
     assert oracle_tf(path) == sympy.Rational(1, 2)
+
+
+def _random_model(rng: random.Random) -> str:
+    """A small random bond graph: junctions joined by bonds and two-ports, one-ports on them."""
+    junctions = [f"{rng.choice('01')}:j{i}" for i in range(rng.randint(2, 4))]
+    lines = ["model random", "param p = 1"]
+    lines += [f"{a} -> {b}" for a, b in itertools.pairwise(junctions)]
+    for i in range(rng.randint(0, 2)):
+        a, b = rng.sample(junctions, 2)
+        lines.append(f"{a} -> {rng.choice(['TF', 'GY'])}:t{i}(p) -> {b}")
+    lines.append(f"{rng.choice(['Se', 'Sf'])}:u -> {rng.choice(junctions)}")
+    lines.append(f"{rng.choice(junctions)} -> {rng.choice(['De', 'Df'])}:y")
+    for i in range(rng.randint(1, 4)):
+        lines.append(f"{rng.choice(junctions)} -> {rng.choice('RCI')}:e{i}(p)")
+    return "\n".join(lines) + "\n"
+
+
+def _some_causality_exists(graph) -> bool:
+    """Brute force: is there any assignment of strokes that every component accepts?"""
+    bonds = [b.number for b in graph.bonds]
+    for pattern in itertools.product((True, False), repeat=len(bonds)):
+        tail_imposes = dict(zip(bonds, pattern, strict=True))
+        ok = True
+        for component in graph.components:
+            name, kind = component.name, component.type.name
+            values = [
+                tail_imposes[p.bond] == (graph.bond(p.bond).tail == name) for p in graph.ports(name)
+            ]
+            ok = (
+                (kind not in ("Se", "Df") or values == [True])
+                and (kind not in ("Sf", "De") or values == [False])
+                and (kind != "TF" or values[0] != values[1])
+                and (kind != "GY" or values[0] == values[1])
+                and (kind != "0" or values.count(False) == 1)
+                and (kind != "1" or values.count(True) == 1)
+            )
+            if not ok:
+                break
+        if ok:
+            return True
+    return False
+
+
+def test_assignment_is_found_whenever_one_exists(models):
+    """Backtracking: the procedure never reports a conflict that some assignment avoids."""
+    rng = random.Random(1992)
+    found = refused = 0
+    for _ in range(200):
+        text = _random_model(rng)
+        try:
+            graph = models.build(text)
+        except ModelError:
+            continue
+        if len(graph.bonds) > 9:
+            continue
+        exists = _some_causality_exists(graph)
+        try:
+            result = assign(graph)
+        except ModelError as problem:
+            assert not exists, text
+            assert problem.kinds() == ["causal_conflict"]
+            refused += 1
+            continue
+        assert exists, text
+        check_rules_structurally(result)
+        found += 1
+    assert found > 50 and refused > 10  # the sample exercises both outcomes
+
+
+def check_rules_structurally(c: CausalBondGraph) -> None:
+    """`check_rules` without the storage preferences: a complete, consistent causality."""
+    for component in c.bondgraph.components:
+        if component.type.name not in ("C", "I"):
+            continue
+        assert c.imposes_effort(component.name, c.bondgraph.ports(component.name)[0].bond) == (
+            (component.type.name == "C") != (component.name in c.dependent)
+        )
+    check_rules(c)
