@@ -14,11 +14,10 @@ from mtt.causality import assign
 from mtt.causality import describe as describe_causality
 from mtt.components import Role
 from mtt.diagnostics import ModelError
-from mtt.equations import Equations, derive
+from mtt.equations import Equations
 from mtt.options import add_parameter_options, choice_from_args
-from mtt.parameters import parametrise
 from mtt.parse import ParsedModel, parse
-from mtt.pipeline import NO_UNKNOWN, load, read_source
+from mtt.pipeline import NO_UNKNOWN, equations_for, load, read_source
 from mtt.theta import theta_matrix
 from mtt.transfer import transfer_function
 
@@ -168,8 +167,7 @@ def cmd_causality(args) -> int:
 
 
 def _equations(args) -> Equations:
-    graph = _load(args)
-    return derive(assign(graph), parametrise(graph, choice_from_args(args)))
+    return equations_for(_load(args), choice_from_args(args))
 
 
 def cmd_ss(args) -> int:

@@ -7,7 +7,7 @@ from pathlib import Path
 from mtt.bondgraph import BondGraph, build
 from mtt.causality import assign
 from mtt.diagnostics import ModelError, Source, error
-from mtt.equations import derive
+from mtt.equations import Equations, derive
 from mtt.options import ParameterChoice
 from mtt.parameters import parametrise
 from mtt.parse import parse
@@ -41,10 +41,14 @@ NO_UNKNOWN = error(
 )
 
 
+def equations_for(graph: BondGraph, choice: ParameterChoice = DEFAULT_CHOICE) -> Equations:
+    """Bond graph -> causal bond graph -> equations, with the parameters as chosen."""
+    return derive(assign(graph), parametrise(graph, choice))
+
+
 def transfer_for(path: str | Path, choice: ParameterChoice = DEFAULT_CHOICE) -> TransferFunction:
     """Text -> ... -> exact canonical transfer function."""
-    graph = load(path, unknown=choice.unknown)
-    return transfer_function(derive(assign(graph), parametrise(graph, choice)))
+    return transfer_function(equations_for(load(path, unknown=choice.unknown), choice))
 
 
 def theta_for(path: str | Path, choice: ParameterChoice = DEFAULT_CHOICE) -> Theta:

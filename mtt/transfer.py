@@ -52,38 +52,33 @@ def _field(equations: Equations):
     return ZZ.frac_field(*gens), gens
 
 
+def _singular(equations: Equations, why: str) -> ModelError:
+    return ModelError(
+        equations.causal.bondgraph.source,
+        [error("singular_model", f"the equations have no unique solution{why}")],
+    )
+
+
 def transfer_function(equations: Equations) -> TransferFunction:
     """G(s) = C (sE - A)^-1 B + D; raise `ModelError` (singular_model) if it does not exist."""
     F, gens = _field(equations)
     lift = lambda M: M.convert_to(F)  # noqa: E731
-    s = F.from_sympy(LAPLACE)
-    pencil = lift(equations.E) * s - lift(equations.A) if equations.states else None
     C, D = lift(equations.C), lift(equations.D)[0, 0].element
-    if pencil is None:
-        G = D
-    else:
-        system = pencil.hstack(lift(equations.B))
-        _, cleared = system.clear_denoms_rowwise(convert=True)
-        size = len(equations.states)
+    G = D
+    size = len(equations.states)
+    if size:
+        pencil = lift(equations.E) * F.from_sympy(LAPLACE) - lift(equations.A)
+        _, cleared = pencil.hstack(lift(equations.B)).clear_denoms_rowwise(convert=True)
         M, B = cleared[:, :size], cleared[:, size:]
         if M.rank() < size:
-            raise ModelError(
-                equations.causal.bondgraph.source,
-                [
-                    error(
-                        "singular_model",
-                        "the equations have no unique solution: det(sE - A) is identically zero",
-                    )
-                ],
-            )
+            raise _singular(equations, ": det(sE - A) is identically zero")
         xnum, den = M.solve_den(B)
-        R = M.domain
         x = xnum.convert_to(F)
-        G = sum((C[0, j].element * x[j, 0].element for j in range(size)), F.zero)
-        G = G / F.convert_from(den, R) + D
+        CX = sum((C[0, j].element * x[j, 0].element for j in range(size)), F.zero)
+        G = CX / F.convert_from(den, M.domain) + D
     if any(not isinstance(g, sympy.Symbol) for g in gens):
         G = _evaluate_constants(equations, F, G)
-    return _canonical(equations, F, gens, G)
+    return _canonical(equations, gens, G)
 
 
 def _evaluate_constants(equations: Equations, F, G):
@@ -95,14 +90,11 @@ def _evaluate_constants(equations: Equations, F, G):
     """
     num, den = (sympy.expand(p.as_expr()) for p in (G.numer, G.denom))
     if den == 0:
-        raise ModelError(
-            equations.causal.bondgraph.source,
-            [error("singular_model", "the equations have no unique solution")],
-        )
+        raise _singular(equations, "")
     return F.from_sympy(num) / F.from_sympy(den)
 
 
-def _canonical(equations: Equations, F, gens, G) -> TransferFunction:
+def _canonical(equations: Equations, gens, G) -> TransferFunction:
     """Coprime, integer, content 1, positive leading term of the highest power of s."""
     num, den = G.numer, G.denom  # coprime, over ZZ
     content = gcd(*(int(c) for c in (*num.coeffs(), *den.coeffs()) if c))
