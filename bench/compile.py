@@ -18,15 +18,14 @@ from pathlib import Path
 
 import sympy
 
-from mtt.bondgraph import build
-from mtt.causality import assign
-from mtt.equations import derive
-from mtt.options import ParameterChoice
-from mtt.parameters import parametrise
-from mtt.parse import parse
-from mtt.pipeline import read_source
-from mtt.theta import theta_matrix
-from mtt.transfer import LAPLACE, transfer_function
+from mtt.derivation.causality import assign
+from mtt.derivation.equations import derive
+from mtt.derivation.parameters import ParameterChoice, parametrise
+from mtt.derivation.pipeline import read_source
+from mtt.derivation.theta import theta_matrix
+from mtt.derivation.transfer import LAPLACE, transfer_function
+from mtt.language.bondgraph import build
+from mtt.language.parse import parse
 
 ROOT = Path(__file__).resolve().parent.parent
 TARGETS = {"dc_drive": 0.5, "absorber": 0.5, "ladder20": 2.0}

@@ -1,3 +1,3 @@
-from mtt.cli import main
+from mtt.cli.main import main
 
 raise SystemExit(main())

@@ -10,9 +10,9 @@ from pathlib import Path
 
 import pytest
 
-from mtt.bondgraph import BondGraph, build
-from mtt.diagnostics import ModelError, Source
-from mtt.parse import ParsedModel, parse
+from mtt.language.bondgraph import BondGraph, build
+from mtt.language.diagnostics import ModelError, Source
+from mtt.language.parse import ParsedModel, parse
 
 ROOT = Path(__file__).resolve().parent.parent
 DATA = Path(__file__).resolve().parent / "data"

@@ -26,8 +26,8 @@ from pathlib import Path
 import sympy
 from sympy.polys.matrices import DomainMatrix
 
-from mtt.bondgraph import BondGraph
-from mtt.pipeline import load
+from mtt.derivation.pipeline import load
+from mtt.language.bondgraph import BondGraph
 
 S = sympy.Symbol("s")
 

@@ -9,10 +9,10 @@ import pytest
 import sympy
 from sympy import Rational, Symbol
 
-from mtt.bondgraph import build
-from mtt.diagnostics import ModelError, Position, Severity, Source
-from mtt.parse import parse
-from mtt.pipeline import load, read_source
+from mtt.derivation.pipeline import load, read_source
+from mtt.language.bondgraph import build
+from mtt.language.diagnostics import ModelError, Position, Severity, Source
+from mtt.language.parse import parse
 
 ROOT = Path(__file__).resolve().parent.parent
 DATA = ROOT / "tests" / "data"

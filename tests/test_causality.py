@@ -10,9 +10,9 @@ import pytest
 import sympy
 from oracle import oracle_tf
 
-from mtt.causality import CausalBondGraph, assign, describe
-from mtt.diagnostics import ModelError, Source
-from mtt.pipeline import load, transfer_for
+from mtt.derivation.causality import CausalBondGraph, assign, describe
+from mtt.derivation.pipeline import load, transfer_for
+from mtt.language.diagnostics import ModelError, Source
 
 ROOT = Path(__file__).resolve().parent.parent
 SYSTEMS = Path(__file__).resolve().parent / "data" / "systems"

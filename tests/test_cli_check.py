@@ -12,7 +12,7 @@ from pathlib import Path
 import pytest
 
 from mtt import __version__
-from mtt.cli import main
+from mtt.cli.main import main
 
 ROOT = Path(__file__).resolve().parent.parent
 DATA = ROOT / "tests" / "data"

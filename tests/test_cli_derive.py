@@ -12,7 +12,7 @@ from pathlib import Path
 import pytest
 import sympy
 
-from mtt.cli import EXIT_MODEL_ERROR, EXIT_OK, main
+from mtt.cli.main import EXIT_MODEL_ERROR, EXIT_OK, main
 
 ROOT = Path(__file__).resolve().parent.parent
 MODELS = ROOT / "models"

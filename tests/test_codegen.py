@@ -15,11 +15,11 @@ import numpy as np
 import pytest
 import sympy
 
-from mtt import codegen
-from mtt.diagnostics import ModelError
-from mtt.options import ParameterChoice
-from mtt.pipeline import theta_for
-from mtt.theta import Theta
+from mtt.derivation.parameters import ParameterChoice
+from mtt.derivation.pipeline import theta_for
+from mtt.derivation.theta import Theta
+from mtt.estimator import codegen
+from mtt.language.diagnostics import ModelError
 
 ROOT = Path(__file__).resolve().parent.parent
 k, s, tau, l = sympy.symbols("k s tau l")  # noqa: E741 - the paper's names
@@ -91,8 +91,9 @@ def test_committed_modules_are_what_mtt_generates(model, monkeypatch):
 
 def test_generation_does_not_depend_on_hash_seeds():
     program = (
-        "import sys; from mtt import codegen; from mtt.options import ParameterChoice; "
-        "from mtt.pipeline import theta_for; "
+        "import sys; from mtt.estimator import codegen; "
+        "from mtt.derivation.parameters import ParameterChoice; "
+        "from mtt.derivation.pipeline import theta_for; "
         "choice = ParameterChoice(keep=frozenset({'tau', 'l'})); "
         "sys.stdout.write(codegen.render(theta_for('models/absorber.bg', choice)))"
     )

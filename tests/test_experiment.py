@@ -10,7 +10,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from mtt.cli import main
+from mtt.cli.main import main
 
 ROOT = Path(__file__).resolve().parent.parent
 DC_DRIVE = str(ROOT / "models" / "dc_drive.bg")

@@ -8,8 +8,8 @@ import pytest
 import sympy
 from sympy import Rational, Symbol
 
-from mtt.diagnostics import ModelError, Position, Source
-from mtt.parse import MAX_DIGITS, parse, parse_expression
+from mtt.language.diagnostics import ModelError, Position, Source
+from mtt.language.parse import MAX_DIGITS, parse, parse_expression
 
 a, b, c, x, k = sympy.symbols("a b c x k")
 

@@ -15,10 +15,10 @@ import pytest
 import sympy
 from oracle import Singular, oracle_tf
 
-from mtt.diagnostics import ModelError
-from mtt.options import ParameterChoice
-from mtt.pipeline import transfer_for
-from mtt.transfer import TransferFunction
+from mtt.derivation.parameters import ParameterChoice
+from mtt.derivation.pipeline import transfer_for
+from mtt.derivation.transfer import TransferFunction
+from mtt.language.diagnostics import ModelError
 
 ROOT = Path(__file__).resolve().parent.parent
 SYSTEMS = Path(__file__).resolve().parent / "data" / "systems"

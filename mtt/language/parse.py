@@ -17,7 +17,7 @@ import lark
 import sympy
 from lark import Token, Transformer
 
-from mtt.diagnostics import Diagnostic, ModelError, Position, Source, error
+from mtt.language.diagnostics import Diagnostic, ModelError, Position, Source, error
 from mtt.resources import resource_dir
 
 FUNCTIONS = {

@@ -14,9 +14,17 @@ from types import MappingProxyType
 import networkx as nx
 import sympy
 
-from mtt.components import LIBRARY, ComponentType, PortRule, Role
-from mtt.diagnostics import Diagnostic, ModelError, Position, Severity, Source, error, warning
-from mtt.parse import RESERVED, ComponentUse, Expression, NameUse, ParsedModel
+from mtt.language.components import LIBRARY, ComponentType, PortRule, Role
+from mtt.language.diagnostics import (
+    Diagnostic,
+    ModelError,
+    Position,
+    Severity,
+    Source,
+    error,
+    warning,
+)
+from mtt.language.parse import RESERVED, ComponentUse, Expression, NameUse, ParsedModel
 
 
 @dataclass(frozen=True)

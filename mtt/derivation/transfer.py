@@ -16,8 +16,8 @@ import sympy
 from sympy.polys.domains import ZZ
 from sympy.polys.rings import PolyElement
 
-from mtt.diagnostics import ModelError, error
-from mtt.equations import Equations
+from mtt.derivation.equations import Equations
+from mtt.language.diagnostics import ModelError, error
 
 LAPLACE = sympy.Symbol("s")
 

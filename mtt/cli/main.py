@@ -8,18 +8,19 @@ import os
 import sys
 import traceback
 
-from mtt import __version__, experiment, report
-from mtt.bondgraph import BondGraph, build, summary_counts
-from mtt.causality import assign
-from mtt.causality import describe as describe_causality
-from mtt.components import Role
-from mtt.diagnostics import ModelError
-from mtt.equations import Equations
-from mtt.options import add_parameter_options, choice_from_args
-from mtt.parse import ParsedModel, parse
-from mtt.pipeline import NO_UNKNOWN, equations_for, load, read_source
-from mtt.theta import theta_matrix
-from mtt.transfer import transfer_function
+from mtt import __version__
+from mtt.cli import experiment, report
+from mtt.cli.options import add_parameter_options, choice_from_args
+from mtt.derivation.causality import assign
+from mtt.derivation.causality import describe as describe_causality
+from mtt.derivation.equations import Equations
+from mtt.derivation.pipeline import NO_UNKNOWN, equations_for, load, read_source
+from mtt.derivation.theta import theta_matrix
+from mtt.derivation.transfer import transfer_function
+from mtt.language.bondgraph import BondGraph, build, summary_counts
+from mtt.language.components import Role
+from mtt.language.diagnostics import ModelError
+from mtt.language.parse import ParsedModel, parse
 
 EXIT_OK, EXIT_MODEL_ERROR, EXIT_BUG = 0, 2, 3
 BUG_REPORT = (

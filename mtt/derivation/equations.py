@@ -21,11 +21,11 @@ from sympy.polys.domains import QQ
 from sympy.polys.domains.domain import Domain
 from sympy.polys.matrices import DomainMatrix
 
-from mtt.bondgraph import Component
-from mtt.causality import CausalBondGraph
-from mtt.components import PortVariables, Role
-from mtt.diagnostics import ModelError, error
-from mtt.parameters import Parametrisation
+from mtt.derivation.causality import CausalBondGraph
+from mtt.derivation.parameters import Parametrisation
+from mtt.language.bondgraph import Component
+from mtt.language.components import PortVariables, Role
+from mtt.language.diagnostics import ModelError, error
 
 INPUT, OUTPUT = "u", "y"
 

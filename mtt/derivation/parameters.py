@@ -7,15 +7,28 @@ the parameters it names.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from functools import cache
 from types import MappingProxyType
 
 import sympy
 
-from mtt.bondgraph import BondGraph
-from mtt.diagnostics import ModelError, error
-from mtt.options import ParameterChoice
+from mtt.language.bondgraph import BondGraph
+from mtt.language.diagnostics import ModelError, error
+
+
+@dataclass(frozen=True)
+class ParameterChoice:
+    """Which parameter is identified, which stay symbolic, and which values are overridden.
+
+    By default every parameter with a value in the file is substituted exactly and
+    the others stay symbolic; the unknown always stays symbolic.
+    """
+
+    unknown: str | None = None
+    keep: frozenset[str] = frozenset()
+    symbolic: bool = False
+    overrides: MappingProxyType = field(default_factory=lambda: MappingProxyType({}))
 
 
 @dataclass(frozen=True)

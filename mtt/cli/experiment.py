@@ -21,9 +21,10 @@ import numpy as np
 import sympy
 from tqdm import tqdm
 
-from mtt import codegen, pipeline
-from mtt.options import add_parameter_options, choice_from_args
-from mtt.parse import LAPLACE, parse_expression
+from mtt.cli.options import add_parameter_options, choice_from_args
+from mtt.derivation import pipeline
+from mtt.estimator import codegen
+from mtt.language.parse import LAPLACE, parse_expression
 
 EXIT_OK, EXIT_STOPPED, EXIT_USAGE = 0, 1, 2
 DEFAULT_T_END, DEFAULT_DT, DEFAULT_SEED = 10.0, 0.01, 0
@@ -224,7 +225,7 @@ def cmd_compile(args) -> int:
 
 
 def cmd_simulate(args) -> int:
-    from mtt import plots  # matplotlib takes a quarter second to import: only plotting pays
+    from mtt.cli import plots  # matplotlib takes a quarter second to import: only plotting pays
 
     module = _model(args)
     data = experiment_data(module, args)
@@ -243,7 +244,7 @@ def cmd_simulate(args) -> int:
 
 
 def cmd_estimate(args) -> int:
-    from mtt import plots  # matplotlib takes a quarter second to import: only plotting pays
+    from mtt.cli import plots  # matplotlib takes a quarter second to import: only plotting pays
 
     if args.cost_range and not args.cost_range[0] < args.cost_range[1]:
         low, high = args.cost_range

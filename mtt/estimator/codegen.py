@@ -25,9 +25,9 @@ import jinja2
 import sympy
 
 from mtt import __version__
-from mtt.diagnostics import ModelError, Source, error
+from mtt.derivation.theta import Theta
+from mtt.language.diagnostics import ModelError, Source, error
 from mtt.resources import resource_dir
-from mtt.theta import Theta
 
 # Keyword names of the generated functions: a kept parameter, passed as a keyword
 # argument (`estimate(..., tau=2)`), must not take one of them.

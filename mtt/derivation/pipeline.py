@@ -4,15 +4,14 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from mtt.bondgraph import BondGraph, build
-from mtt.causality import assign
-from mtt.diagnostics import ModelError, Source, error
-from mtt.equations import Equations, derive
-from mtt.options import ParameterChoice
-from mtt.parameters import parametrise
-from mtt.parse import parse
-from mtt.theta import Theta, theta_matrix
-from mtt.transfer import TransferFunction, transfer_function
+from mtt.derivation.causality import assign
+from mtt.derivation.equations import Equations, derive
+from mtt.derivation.parameters import ParameterChoice, parametrise
+from mtt.derivation.theta import Theta, theta_matrix
+from mtt.derivation.transfer import TransferFunction, transfer_function
+from mtt.language.bondgraph import BondGraph, build
+from mtt.language.diagnostics import ModelError, Source, error
+from mtt.language.parse import parse
 
 
 def read_source(path: str | Path) -> Source:

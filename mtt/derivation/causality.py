@@ -18,9 +18,9 @@ from collections import deque
 from dataclasses import dataclass
 from types import MappingProxyType
 
-from mtt.bondgraph import BondGraph, Component
-from mtt.components import CausalKind, PortRule, Role
-from mtt.diagnostics import ModelError, error
+from mtt.language.bondgraph import BondGraph, Component
+from mtt.language.components import CausalKind, PortRule, Role
+from mtt.language.diagnostics import ModelError, error
 
 # Backtracking over free causal choices gives up (with the first conflict) after this many
 # failed attempts: the search is exponential in the worst case.

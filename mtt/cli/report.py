@@ -4,9 +4,9 @@ from __future__ import annotations
 
 import sympy
 
-from mtt.equations import Equations
-from mtt.theta import Theta
-from mtt.transfer import LAPLACE
+from mtt.derivation.equations import Equations
+from mtt.derivation.theta import Theta
+from mtt.derivation.transfer import LAPLACE
 
 
 def in_powers_of_s(expression: sympy.Expr) -> str:

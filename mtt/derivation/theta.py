@@ -12,7 +12,7 @@ from dataclasses import dataclass
 
 import sympy
 
-from mtt.transfer import TransferFunction
+from mtt.derivation.transfer import TransferFunction
 
 
 @dataclass(frozen=True)

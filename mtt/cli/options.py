@@ -3,26 +3,12 @@
 from __future__ import annotations
 
 import argparse
-from dataclasses import dataclass, field
 from types import MappingProxyType
 
 import sympy
 
-from mtt.parse import parse_expression
-
-
-@dataclass(frozen=True)
-class ParameterChoice:
-    """Which parameter is identified, which stay symbolic, and which values are overridden.
-
-    By default every parameter with a value in the file is substituted exactly and
-    the others stay symbolic; the unknown always stays symbolic.
-    """
-
-    unknown: str | None = None
-    keep: frozenset[str] = frozenset()
-    symbolic: bool = False
-    overrides: MappingProxyType = field(default_factory=lambda: MappingProxyType({}))
+from mtt.derivation.parameters import ParameterChoice
+from mtt.language.parse import parse_expression
 
 
 def _assignment(text: str) -> tuple[str, sympy.Expr]:

@@ -1,0 +1,1 @@
+"""The `mtt` command line."""

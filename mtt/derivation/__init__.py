@@ -1,0 +1,1 @@
+"""Bond graph -> causal bond graph -> equations -> transfer function -> Theta, exactly."""

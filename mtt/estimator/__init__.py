@@ -1,0 +1,1 @@
+"""Theta -> a standalone estimator module (the algorithm lives in templates/)."""

@@ -1,0 +1,1 @@
+"""The .bg language: text -> parse tree -> validated bond graph, with located diagnostics."""
