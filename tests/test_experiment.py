@@ -182,7 +182,7 @@ def test_a_stopped_run_is_reported_with_exit_status_1(capsys):
         (["--k0", "1", "--cost-plot", "c.png", "--cost-range", "1", "0"], "needs A < B"),
         (["--k0", "1", "--data", "d.csv", "--k", "3"], "--data and --k do not go together"),
         (["--k0", "1", "--data", "missing.csv"], "missing.csv: No such file or directory"),
-        (["--k0", "1", "--input", "bad.csv"], "bad.csv: no column 'u'"),
+        (["--k0", "1", "--signal", "bad.csv"], "bad.csv: no column 'u'"),
         (["--k0", "1", "--data", "nan.csv"], "y[1] is nan: every value must be finite"),
         (["--k0", "1", "--data", "back.csv"], "t must be strictly increasing"),
         (["--k0", "1", "--data", "text.csv"], "text.csv:3: expected numbers in columns t, u, y"),

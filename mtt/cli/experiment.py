@@ -48,12 +48,12 @@ class Data:
     note: str  # where the data came from, for tables and titles
 
 
-def _input(module: ModuleType, args) -> tuple[np.ndarray, np.ndarray]:
+def _signal(module: ModuleType, args) -> tuple[np.ndarray, np.ndarray]:
     """The input samples: a unit step from t = 0 on a regular grid, or a CSV file's."""
-    if args.input not in (None, "step"):
+    if args.signal not in (None, "step"):
         if args.t_end is not None or args.dt is not None:
-            raise UsageError("--t-end and --dt apply to --input step; the file gives the times")
-        return module.read_csv(args.input, ("t", "u"))
+            raise UsageError("--t-end and --dt apply to --signal step; the file gives the times")
+        return module.read_csv(args.signal, ("t", "u"))
     t_end = DEFAULT_T_END if args.t_end is None else args.t_end
     dt = DEFAULT_DT if args.dt is None else args.dt
     if not (0 < dt <= t_end < np.inf):
@@ -67,7 +67,7 @@ def _input(module: ModuleType, args) -> tuple[np.ndarray, np.ndarray]:
 
 def experiment_data(module: ModuleType, args) -> Data:
     """Measured data (--data), or a simulation of the model with the chosen input and noise."""
-    simulation = {"--input": args.input, "--t-end": args.t_end, "--dt": args.dt, "--k": args.k}
+    simulation = {"--signal": args.signal, "--t-end": args.t_end, "--dt": args.dt, "--k": args.k}
     simulation |= {"--noise-uniform": args.noise_uniform, "--seed": args.seed}
     if getattr(args, "data", None):
         given = [flag for flag, value in simulation.items() if value is not None]
@@ -75,7 +75,7 @@ def experiment_data(module: ModuleType, args) -> Data:
             raise UsageError(f"--data and {given[0]} do not go together ({given[0]} simulates)")
         t, u, y = module.read_csv(args.data)
         return Data(t, u, y, None, None, f"{t.size} samples from {args.data}")
-    t, u = _input(module, args)
+    t, u = _signal(module, args)
     k = module.TRUE_VALUE if args.k is None else args.k
     if k is None:
         raise UsageError(f"the model gives no value of {module.UNKNOWN} to simulate with: pass --k")
@@ -85,7 +85,7 @@ def experiment_data(module: ModuleType, args) -> Data:
         raise UsageError(f"--noise-uniform must be >= 0, not {noise}")
     seed = DEFAULT_SEED if args.seed is None else args.seed
     y = clean + np.random.default_rng(seed).uniform(-noise, noise, clean.size) if noise else clean
-    source = "a unit step" if args.input in (None, "step") else args.input
+    source = "a unit step" if args.signal in (None, "step") else args.signal
     note = f"{t.size} samples simulated with {module.UNKNOWN} = {k:g}, input {source}"
     if noise:
         note += f", noise uniform in [-{noise:g}, {noise:g}] (seed {seed})"
@@ -345,9 +345,10 @@ def _data_options(parser: argparse.ArgumentParser, measured: bool) -> None:
             "--data", metavar="FILE.csv", help="measured data: a CSV file with columns t,u,y"
         )
     group.add_argument(
-        "--input",
+        "--signal",
         metavar="step|FILE.csv",
-        help="simulated input: a unit step at t = 0 (default), or a CSV file with columns t,u",
+        help="the simulated input signal: a unit step at t = 0 (default), or a CSV file with "
+        "columns t,u",
     )
     group.add_argument("--t-end", type=float, help=f"duration (default {DEFAULT_T_END:g})")
     group.add_argument("--dt", type=float, help=f"sampling interval (default {DEFAULT_DT:g})")
