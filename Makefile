@@ -94,5 +94,10 @@ absorber_cost: $(STAMP)
 		--cost-plot $(FIGURES)/fig8_absorber_cost.png > $(FIGURES)/absorber_cost.txt
 	@$(REPORT) $(FIGURES)/absorber_cost.txt
 
+# Benchmarks: each bench/*.py prints its table (bench/README.md keeps the current ones).
+.PHONY: bench
+bench: $(STAMP)
+	@for script in bench/*.py; do echo "== $$script"; $(BIN)/python $$script || exit 1; done
+
 clean:
 	rm -rf $(VENV) build dist .pytest_cache .ruff_cache

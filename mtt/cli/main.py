@@ -1,4 +1,9 @@
-"""The `mtt` command: one subcommand per representation a user may want to see."""
+"""The `mtt` command: one subcommand per representation a user may want to see.
+
+Building the parser imports nothing heavy: each command imports the stages it runs
+(sympy, scipy, matplotlib...) in its own body, so `mtt --help` starts at once and no
+command pays for another's libraries (tests/test_cli_startup.py holds this).
+"""
 
 from __future__ import annotations
 
@@ -7,20 +12,17 @@ import json
 import os
 import sys
 import traceback
+from typing import TYPE_CHECKING
 
 from mtt import __version__
-from mtt.cli import experiment, report
+from mtt.cli import experiment_args
 from mtt.cli.options import add_parameter_options, choice_from_args
-from mtt.derivation.causality import assign
-from mtt.derivation.causality import describe as describe_causality
-from mtt.derivation.equations import Equations
-from mtt.derivation.pipeline import NO_UNKNOWN, equations_for, load, read_source
-from mtt.derivation.theta import theta_matrix
-from mtt.derivation.transfer import transfer_function
-from mtt.language.bondgraph import BondGraph, build, summary_counts
-from mtt.language.components import Role
 from mtt.language.diagnostics import ModelError
-from mtt.language.parse import ParsedModel, parse
+
+if TYPE_CHECKING:
+    from mtt.derivation.equations import Equations
+    from mtt.language.bondgraph import BondGraph
+    from mtt.language.parse import ParsedModel
 
 EXIT_OK, EXIT_MODEL_ERROR, EXIT_BUG = 0, 2, 3
 BUG_REPORT = (
@@ -68,6 +70,10 @@ def _summary(
 
 
 def _check_one(file: str, unknown: str | None) -> tuple[dict, ModelError | None, BondGraph | None]:
+    from mtt.derivation.pipeline import read_source
+    from mtt.language.bondgraph import build
+    from mtt.language.parse import parse
+
     parsed = graph = problem = None
     source = None
     try:
@@ -114,6 +120,8 @@ def _table(rows: list[tuple[str, ...]], indent: str = "  ") -> list[str]:
 
 def describe(graph: BondGraph) -> str:
     """A readable summary of a bond graph, for `mtt show`."""
+    from mtt.language.bondgraph import summary_counts
+
     lines = [f"model {graph.name}" + (f": {graph.description}" if graph.description else "")]
     lines.append(f"file {graph.source.name}")
     if graph.parameters:
@@ -151,6 +159,8 @@ def describe(graph: BondGraph) -> str:
 
 def _load(args) -> BondGraph:
     """The file's bond graph; its warnings go to stderr, its errors raise `ModelError`."""
+    from mtt.derivation.pipeline import load
+
     graph = load(args.file, unknown=getattr(args, "unknown", None))
     for note in graph.warnings:
         print(graph.source.render(note), file=sys.stderr)
@@ -163,21 +173,34 @@ def cmd_show(args) -> int:
 
 
 def cmd_causality(args) -> int:
+    from mtt.derivation.causality import assign
+    from mtt.derivation.causality import describe as describe_causality
+
     print(describe_causality(assign(_load(args))))
     return EXIT_OK
 
 
 def _equations(args) -> Equations:
+    from mtt.derivation.pipeline import equations_for
+
     return equations_for(_load(args), choice_from_args(args))
 
 
 def cmd_ss(args) -> int:
+    from mtt.cli import report
+
     equations = _equations(args)
     print(report.ss_latex(equations) if args.latex else report.ss_text(equations))
     return EXIT_OK
 
 
 def _derived(args, text, latex) -> int:
+    from mtt.cli import report
+    from mtt.derivation.pipeline import NO_UNKNOWN
+    from mtt.derivation.theta import theta_matrix
+    from mtt.derivation.transfer import transfer_function
+    from mtt.language.components import Role
+
     equations = _equations(args)
     theta = theta_matrix(transfer_function(equations))
     if args.command == "theta" and theta.unknown is None:
@@ -192,10 +215,14 @@ def _derived(args, text, latex) -> int:
 
 
 def cmd_tf(args) -> int:
+    from mtt.cli import report
+
     return _derived(args, report.tf_text, report.tf_latex)
 
 
 def cmd_theta(args) -> int:
+    from mtt.cli import report
+
     return _derived(args, report.theta_text, report.theta_latex)
 
 
@@ -255,7 +282,7 @@ def make_parser() -> argparse.ArgumentParser:
             command.add_argument("--json", action="store_true", help="print one JSON object")
         command.set_defaults(run=run)
 
-    experiment.register(commands)
+    experiment_args.register(commands)
     return parser
 
 

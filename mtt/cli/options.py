@@ -1,17 +1,24 @@
-"""Command-line options shared by every command that derives equations from a model."""
+"""Command-line options shared by every command that derives equations from a model.
+
+Light to import (sympy is imported by a `--set` value or when a command runs), so that
+building the `mtt` parser stays fast.
+"""
 
 from __future__ import annotations
 
 import argparse
 from types import MappingProxyType
+from typing import TYPE_CHECKING
 
-import sympy
+if TYPE_CHECKING:
+    import sympy
 
-from mtt.derivation.parameters import ParameterChoice
-from mtt.language.parse import parse_expression
+    from mtt.derivation.parameters import ParameterChoice
 
 
 def _assignment(text: str) -> tuple[str, sympy.Expr]:
+    from mtt.language.parse import parse_expression
+
     name, equals, value = text.partition("=")
     if not equals or not name.strip().isidentifier():
         raise argparse.ArgumentTypeError(f"expected NAME=VALUE, not {text!r}")
@@ -53,6 +60,8 @@ def add_parameter_options(parser: argparse.ArgumentParser) -> None:
 
 
 def choice_from_args(args: argparse.Namespace) -> ParameterChoice:
+    from mtt.derivation.parameters import ParameterChoice
+
     return ParameterChoice(
         unknown=args.unknown,
         keep=frozenset(args.keep),
