@@ -1,3 +1,36 @@
-"""mtt: from a bond graph with one unknown parameter to an estimator for that parameter."""
+"""mtt: from a bond graph with an unknown parameter to an estimator for that parameter.
+
+>>> import mtt
+>>> model = mtt.load(mtt.example("dc_drive"))
+>>> model.transfer_function.den
+k*s**4 + 10*k*s**3 + 11*k*s**2 + 10*k*s + s**2 + 10*s + 10
+
+The API lives in mtt.api (docs/api.md); `import mtt` stays light (no sympy, numpy or
+scipy) until one of its names is used, so that the `mtt` command starts at once.
+"""
+
+from mtt.language.diagnostics import MttError
 
 __version__ = "0.1.0"
+__all__ = [
+    "Causality",
+    "Model",
+    "MttError",
+    "StateSpace",
+    "Theta",
+    "TransferFunction",
+    "example",
+    "load",
+]
+
+
+def __getattr__(name: str):
+    if name in __all__:
+        from mtt import api
+
+        return getattr(api, name)
+    raise AttributeError(f"module 'mtt' has no attribute {name!r}")
+
+
+def __dir__() -> list[str]:
+    return sorted({*globals(), *__all__})

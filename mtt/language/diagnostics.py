@@ -68,13 +68,44 @@ class Source:
         return f"{head}\n {number} | {text}\n {pad} | {caret}"
 
 
-class ModelError(Exception):
-    """A model that cannot be processed; `diagnostics` holds every problem found."""
+class MttError(Exception):
+    """Every error a user of mtt can cause, with where it is (public as `mtt.MttError`).
+
+    `kind` names the problem (`syntax`, `causal_conflict`, `missing_value`...); `file`,
+    `line` and `column` locate it when it is in a model file (1-based, or None).
+    """
+
+    def __init__(
+        self,
+        message: str,
+        *,
+        kind: str,
+        file: str | None = None,
+        line: int | None = None,
+        column: int | None = None,
+    ):
+        super().__init__(message)
+        self.kind, self.file, self.line, self.column = kind, file, line, column
+
+
+class ModelError(MttError):
+    """A model that cannot be processed; `diagnostics` holds every problem found.
+
+    As an `MttError` it reports its first error: `kind`, `file`, `line`, `column`.
+    """
 
     def __init__(self, source: Source, diagnostics: list[Diagnostic] | tuple[Diagnostic, ...]):
         self.source = source
         self.diagnostics = tuple(diagnostics)
-        super().__init__(self.render())
+        first = (self.errors or self.diagnostics or (Diagnostic("model", ""),))[0]
+        where = first.position
+        super().__init__(
+            self.render(),
+            kind=first.kind,
+            file=source.name,
+            line=where.line if where else None,
+            column=where.column if where else None,
+        )
 
     @property
     def errors(self) -> tuple[Diagnostic, ...]:

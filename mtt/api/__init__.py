@@ -1,0 +1,19 @@
+"""mtt's Python API: `load` a bond graph model, then read its stages as attributes.
+
+See docs/api.md. Everything here is also `mtt.NAME`.
+"""
+
+from mtt.api.model import Model, example, load
+from mtt.api.results import Causality, StateSpace, Theta, TransferFunction
+from mtt.language.diagnostics import MttError
+
+__all__ = [
+    "Causality",
+    "Model",
+    "MttError",
+    "StateSpace",
+    "Theta",
+    "TransferFunction",
+    "example",
+    "load",
+]

@@ -1,0 +1,285 @@
+"""`mtt.load`: a model file (or its text) in, a `Model` out, whose attributes are the stages
+of the derivation chain, each derived once, when first asked for."""
+
+from __future__ import annotations
+
+from collections.abc import Iterable, Mapping
+from dataclasses import dataclass
+from functools import cached_property
+from pathlib import Path
+from types import MappingProxyType, ModuleType
+
+from mtt.api.results import Causality, StateSpace, Theta, TransferFunction, exact
+from mtt.derivation import pipeline
+from mtt.derivation import theta as derived
+from mtt.derivation.causality import assign
+from mtt.derivation.equations import Equations
+from mtt.derivation.parameters import ParameterChoice, parametrise
+from mtt.derivation.transfer import transfer_function
+from mtt.estimator import codegen
+from mtt.language.bondgraph import BondGraph, build
+from mtt.language.diagnostics import MttError, Source
+from mtt.language.parse import parse
+from mtt.resources import resource_dir
+
+TEXT_NAME = "<string>"  # how errors name a model given as text
+
+
+def example(name: str) -> Path:
+    """The path of an example model shipped with mtt (`mtt examples` lists them).
+
+    >>> import mtt
+    >>> mtt.example("dc_drive").name
+    'dc_drive.bg'
+    """
+    path = resource_dir("models") / f"{name}.bg"
+    if not path.is_file():
+        names = ", ".join(sorted(p.stem for p in resource_dir("models").glob("*.bg")))
+        raise MttError(f"no example model {name!r} (examples: {names})", kind="io")
+    return path
+
+
+def _source(path_or_text: str | Path) -> Source:
+    if isinstance(path_or_text, str) and "\n" in path_or_text:
+        return Source(TEXT_NAME, path_or_text.removeprefix("\ufeff"))
+    if isinstance(path_or_text, str | Path):
+        return pipeline.read_source(path_or_text)
+    raise MttError(
+        f"expected a file name or model text, not {type(path_or_text).__name__}", kind="bad_value"
+    )
+
+
+def _names(option: str, value: str | Iterable[str] | None) -> tuple[str, ...]:
+    if value is None:
+        return ()
+    names = value.split(",") if isinstance(value, str) else list(value)
+    if not all(isinstance(name, str) for name in names):
+        raise MttError(f"{option} takes parameter names, not {value!r}", kind="bad_value")
+    return tuple(name.strip() for name in names if name.strip())
+
+
+def load(
+    path_or_text: str | Path,
+    *,
+    unknowns: str | Iterable[str] | None = None,
+    input: str | None = None,
+    output: str | None = None,
+    set: Mapping[str, object] | None = None,
+    keep: str | Iterable[str] | None = None,
+) -> Model:
+    """Read and check a model: a file name (str or Path), or the model's text itself (a str
+    with a line break). Raise `MttError` for anything wrong in it.
+
+    unknowns: the parameter to identify, instead of the model's `unknown` (a name, or a
+        list of one name: several unknowns arrive with language version 2).
+    input, output: the source and the detector (TYPE:NAME), when they are the model's own
+        (choosing others arrives with language version 2).
+    set: values replacing the file's, {name: number or exact expression text}.
+    keep: parameters kept symbolic instead of substituted (names, or "a,b").
+
+    >>> import mtt
+    >>> model = mtt.load('''
+    ... model rc "a first-order low-pass filter"
+    ... param r = 1000
+    ... unknown c = 1e-6
+    ... Se:v -> 1:loop
+    ... 1:loop -> R:r
+    ... 1:loop -> 0:out
+    ... 0:out -> C:c
+    ... 0:out -> De:vc
+    ... ''')
+    >>> model.transfer_function.expr
+    1/(1000*c*s + 1)
+    >>> mtt.load(model.source.text, set={"r": 2000}).transfer_function.expr
+    1/(2000*c*s + 1)
+    """
+    graph_unknowns = _names("unknowns", unknowns)
+    if len(graph_unknowns) > 1:
+        raise MttError(
+            f"several unknowns ({', '.join(graph_unknowns)}) need language version 2, which "
+            "this mtt does not have yet: choose one",
+            kind="unsupported",
+        )
+    unknown = graph_unknowns[0] if graph_unknowns else None
+    source = _source(path_or_text)
+    graph = build(parse(source), unknown=unknown)
+    for option, wanted, own in (("input", input, graph.input), ("output", output, graph.output)):
+        label = graph.component(own).label
+        if wanted is not None and wanted != label:
+            raise MttError(
+                f"{option}={wanted!r}: this mtt derives from the model's own {option} "
+                f"({label}); choosing another arrives with language version 2",
+                kind="unsupported",
+            )
+    overrides = {name: exact(name, value) for name, value in (set or {}).items()}
+    choice = ParameterChoice(
+        unknown=unknown,
+        keep=frozenset(_names("keep", keep)),
+        overrides=MappingProxyType(overrides),
+    )
+    parametrise(graph, choice)  # names in set= and keep= are checked now, not at first use
+    return Model(graph, choice)
+
+
+@dataclass(frozen=True, eq=False)
+class Model:
+    """A checked bond graph model and the choice of its parameters (see `load`).
+
+    Each attribute is a stage of the chain bond graph -> causality -> state space ->
+    transfer function -> Theta -> estimator, derived when first used, then kept.
+
+    >>> import mtt
+    >>> model = mtt.load(mtt.example("dc_drive"))
+    >>> model.name, model.unknowns, model.input, model.output
+    ('dc_drive', ('k',), 'Se:v', 'Df:vm')
+    >>> model.causality.strokes[1]
+    '1:a'
+    """
+
+    bondgraph: BondGraph
+    choice: ParameterChoice
+
+    @property
+    def name(self) -> str:
+        return self.bondgraph.name
+
+    @property
+    def description(self) -> str | None:
+        return self.bondgraph.description
+
+    @property
+    def source(self) -> Source:
+        """The model's text and the name errors report it by."""
+        return self.bondgraph.source
+
+    @property
+    def unknowns(self) -> tuple[str, ...]:
+        return (self.bondgraph.unknown,) if self.bondgraph.unknown else ()
+
+    @property
+    def input(self) -> str:
+        return self.bondgraph.component(self.bondgraph.input).label
+
+    @property
+    def output(self) -> str:
+        return self.bondgraph.component(self.bondgraph.output).label
+
+    @property
+    def parameters(self) -> dict[str, object]:
+        """Every parameter's exact value as the model gives it (None: no value)."""
+        return {
+            name: self.choice.overrides.get(name, p.value.value if p.value else None)
+            for name, p in self.bondgraph.parameters.items()
+        }
+
+    @cached_property
+    def causality(self) -> Causality:
+        return Causality(assign(self.bondgraph))
+
+    @cached_property
+    def _equations(self) -> Equations:
+        return pipeline.equations_for(self.bondgraph, self.choice)
+
+    @cached_property
+    def state_space(self) -> StateSpace:
+        return StateSpace(self._equations)
+
+    @cached_property
+    def _theta(self) -> derived.Theta:
+        return derived.theta_matrix(transfer_function(self._equations))
+
+    @property
+    def transfer_function(self) -> TransferFunction:
+        return TransferFunction(self._theta)
+
+    @property
+    def theta(self) -> Theta:
+        return Theta(self._checked_theta())
+
+    def _checked_theta(self) -> derived.Theta:
+        if self._theta.unknown is None:
+            raise MttError(
+                f"{self.name} declares no unknown parameter: declare one with 'unknown NAME' "
+                "or load it with unknowns='NAME'",
+                kind="no_unknown",
+                file=self.source.name,
+            )
+        return self._theta
+
+    def to_scipy(self, k: object = None, **known: object):
+        """scipy.signal.TransferFunction at unknown = k (default: the file's value).
+
+        >>> import mtt
+        >>> G = mtt.load(mtt.example("dc_drive")).to_scipy(10)
+        >>> G.num.tolist(), G.den.tolist()
+        ([10.0, 0.0, 1.0], [1.0, 10.0, 11.1, 11.0, 1.0])
+        """
+        import scipy.signal
+
+        return scipy.signal.TransferFunction(*self._coefficients(k, known))
+
+    def to_control(self, k: object = None, **known: object):
+        """python-control's TransferFunction at unknown = k (pip install 'mtt[control]')."""
+        try:
+            import control
+        except ImportError:
+            raise MttError(
+                "to_control needs python-control: pip install 'mtt[control]'",
+                kind="missing_dependency",
+            ) from None
+        return control.tf(*self._coefficients(k, known))
+
+    def _coefficients(self, k: object, known: dict):
+        values = dict(known)
+        if k is not None:
+            if not self.unknowns:
+                raise MttError(f"{self.name} has no unknown to give k to", kind="no_unknown")
+            values[self.unknowns[0]] = k
+        return self.transfer_function.at(**values)
+
+    def compile(self, path: str | Path) -> Path:
+        """Write the standalone estimator module (numpy and scipy only) to `path`."""
+        path = Path(path)
+        codegen.write_atomic(path, codegen.render(self._checked_theta()))
+        return path
+
+    @cached_property
+    def _estimator(self) -> ModuleType:
+        return codegen.load(self._checked_theta())
+
+    def estimator(self) -> ModuleType:
+        """The generated estimator module, imported without writing a file: the same
+        module `compile` writes (its docstring is its manual)."""
+        return self._estimator
+
+    def simulate(self, t, u, k: object = None, **options):
+        """The generated module's `simulate(t, u, k, ...)`; k defaults to the file's value."""
+        module = self._estimator
+        k = module.TRUE_VALUE if k is None else k
+        if k is None:
+            raise MttError(
+                f"{self.name} gives no value of its unknown: pass k", kind="missing_value"
+            )
+        return _delegate(module.simulate, t, u, k, **options)
+
+    def estimate(self, t, u, y, **options):
+        """The generated module's recursive `estimate(t, u, y, *, k0, ...)` -> Estimate."""
+        return _delegate(self._estimator.estimate, t, u, y, **options)
+
+    def fit(self, t, u, y, **options):
+        """The generated module's `fit(t, u, y, ...)`: a batch fit of the unknown."""
+        fit = getattr(self._estimator, "fit", None)
+        if fit is None:
+            raise MttError(
+                "this mtt's estimator has no fit yet: use estimate(t, u, y, k0=...)",
+                kind="unsupported",
+            )
+        return _delegate(fit, t, u, y, **options)
+
+
+def _delegate(function, *args, **options):
+    """Call the generated module; its ValueErrors (bad arguments, named) become MttError."""
+    try:
+        return function(*args, **options)
+    except ValueError as exc:
+        raise MttError(str(exc), kind="bad_argument") from exc

@@ -1,0 +1,304 @@
+"""What a model derives, as a Python user holds it: plain sympy and numpy, rich in Jupyter.
+
+Each class wraps one representation of the derivation chain (mtt/derivation) and reads
+the same way as the command line prints it (mtt/cli/report.py): the text and LaTeX
+forms exist once, there.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping
+from dataclasses import dataclass
+from fractions import Fraction
+from functools import cached_property
+
+import numpy as np
+import sympy
+
+from mtt.cli import report
+from mtt.derivation import theta as derived
+from mtt.derivation.causality import CausalBondGraph, describe
+from mtt.derivation.equations import Equations
+from mtt.derivation.transfer import LAPLACE
+from mtt.language.diagnostics import MttError
+
+
+def exact(name: str, value: object) -> sympy.Expr:
+    """A parameter value as an exact number: a float is read as the decimal it prints as
+    (0.1 is 1/10, as if written in a model file); a str is an expression of numbers."""
+    if isinstance(value, bool):
+        raise MttError(f"{name} = {value!r}: expected a number", kind="bad_value")
+    if isinstance(value, str):
+        from mtt.language.parse import parse_expression
+
+        return parse_expression(value, variables=frozenset())
+    if isinstance(value, float | np.floating):
+        if not math.isfinite(value):
+            raise MttError(f"{name} = {value}: every value must be finite", kind="bad_value")
+        return sympy.Rational(repr(float(value)))
+    if isinstance(value, int | np.integer | Fraction):
+        return sympy.Rational(value)
+    if isinstance(value, sympy.Expr) and value.is_number and value.is_finite:
+        return value
+    raise MttError(f"{name} = {value!r}: expected a number", kind="bad_value")
+
+
+def _numeric(expr: sympy.Expr, what: str) -> float:
+    try:
+        number = float(expr)
+    except OverflowError:
+        raise MttError(f"{what} is too large for a float: {expr}", kind="out_of_range") from None
+    except TypeError:  # complex, or a symbol left
+        raise MttError(f"{what} is not a real number: {expr}", kind="bad_value") from None
+    if not math.isfinite(number):
+        raise MttError(f"{what} is too large for a float", kind="out_of_range")
+    return number
+
+
+@dataclass(frozen=True)
+class _Values:
+    """Values for the free names of a result: the unknown and the known parameters kept
+    symbolic. A name not given takes the model file's value; a substituted parameter
+    cannot be given (it is no longer in the result)."""
+
+    theta: derived.Theta
+
+    @property
+    def free(self) -> tuple[str, ...]:
+        return ((self.theta.unknown,) if self.theta.unknown else ()) + self.theta.symbols
+
+    def substitution(self, given: Mapping[str, object]) -> dict[sympy.Symbol, sympy.Expr]:
+        theta = self.theta
+        for name in given:
+            if name in theta.assumed:
+                raise MttError(
+                    f"{name} is known and substituted (= {theta.assumed[name]}): load the model "
+                    f"with keep=[{name!r}] to vary it, or set={{{name!r}: ...}}",
+                    kind="substituted_parameter",
+                )
+            if name not in self.free:
+                raise MttError(
+                    f"{name!r} is not a parameter of {theta.model} "
+                    f"(free: {', '.join(self.free) or 'none'})",
+                    kind="undeclared_parameter",
+                )
+        defaults = dict(theta.defaults)
+        if theta.unknown:
+            defaults[theta.unknown] = theta.true_value
+        values = {}
+        for name in self.free:
+            value = exact(name, given[name]) if name in given else defaults[name]
+            if value is None:
+                raise MttError(
+                    f"{theta.model} gives no value for {name}: pass {name}=VALUE",
+                    kind="missing_value",
+                )
+            values[sympy.Symbol(name)] = value
+        return values
+
+
+@dataclass(frozen=True)
+class TransferFunction:
+    """G(s) = num / den, exact: numerator and denominator are sympy polynomials in `s`, the
+    unknown and any parameter kept symbolic, coprime, with integer coefficients.
+
+    >>> import mtt
+    >>> tf = mtt.load(mtt.example("dc_drive")).transfer_function
+    >>> tf.num
+    10*k*s**2 + 10
+    >>> num, den = tf.at(k=10)
+    >>> num.tolist(), den.tolist()
+    ([100.0, 0.0, 10.0], [10.0, 100.0, 111.0, 110.0, 10.0])
+    """
+
+    theta: derived.Theta
+
+    s = LAPLACE
+
+    @property
+    def num(self) -> sympy.Expr:
+        return self.theta.num
+
+    @property
+    def den(self) -> sympy.Expr:
+        return self.theta.den
+
+    @property
+    def expr(self) -> sympy.Expr:
+        """num / den as one sympy expression."""
+        return self.theta.num / self.theta.den
+
+    @property
+    def unknowns(self) -> tuple[str, ...]:
+        return (self.theta.unknown,) if self.theta.unknown else ()
+
+    @property
+    def symbols(self) -> tuple[str, ...]:
+        """Known parameters kept symbolic (load(..., keep=...) or without a value)."""
+        return self.theta.symbols
+
+    @property
+    def n(self) -> int:
+        """The degree of the denominator in s (the order of the system)."""
+        return self.theta.n
+
+    @property
+    def m(self) -> int:
+        """The degree of the numerator in s."""
+        return self.theta.m
+
+    @cached_property
+    def _coefficients(self) -> tuple[list[sympy.Expr], list[sympy.Expr]]:
+        return tuple(sympy.Poly(p, LAPLACE).all_coeffs() for p in (self.num, self.den))
+
+    def at(self, **values: object) -> tuple[np.ndarray, np.ndarray]:
+        """(num, den) as float arrays, highest power of s first (scipy.signal's order), for
+        the values given; a name not given takes the model file's value."""
+        substitution = _Values(self.theta).substitution(values)
+        num, den = (
+            np.array([_numeric(c.xreplace(substitution), f"a coefficient of {part}") for c in p])
+            for part, p in zip(("num", "den"), self._coefficients, strict=True)
+        )
+        if not den.any():
+            raise MttError(f"the denominator of G(s) is zero at {values}", kind="singular_model")
+        return num, den
+
+    def __str__(self) -> str:
+        return report.tf_text(self.theta)
+
+    def _repr_latex_(self) -> str:
+        return f"$\\displaystyle {report.tf_latex(self.theta)}$"
+
+
+@dataclass(frozen=True)
+class Theta:
+    """The paper's matrix: theta(k) = [a0..an, -b0..-bm] = matrix * K, with K the column of
+    `monomials` of the unknown (1, k, k^2, ...): what the estimator is built from.
+
+    >>> import mtt
+    >>> theta = mtt.load(mtt.example("dc_drive")).theta
+    >>> theta.monomials
+    (1, k)
+    >>> theta.matrix.T
+    Matrix([
+    [10, 10,  1,  0, 0, -10, 0,   0],
+    [ 0, 10, 11, 10, 1,   0, 0, -10]])
+    """
+
+    theta: derived.Theta
+
+    @property
+    def matrix(self) -> sympy.Matrix:
+        return self.theta.matrix
+
+    @property
+    def monomials(self) -> tuple[sympy.Expr, ...]:
+        """Column j of `matrix` multiplies monomials[j]."""
+        k = sympy.Symbol(self.theta.unknown) if self.theta.unknown else sympy.Integer(1)
+        return tuple(k**j for j in range(self.theta.N + 1))
+
+    @property
+    def rows(self) -> tuple[str, ...]:
+        """Row labels: a0..an (denominator), -b0..-bm (numerator, negated)."""
+        return self.theta.row_labels
+
+    @property
+    def unknowns(self) -> tuple[str, ...]:
+        return (self.theta.unknown,) if self.theta.unknown else ()
+
+    @property
+    def N(self) -> int:
+        """The degree of theta in the unknown."""
+        return self.theta.N
+
+    def at(self, **known: object) -> np.ndarray:
+        """The matrix as floats, for values of the parameters kept symbolic (the unknown
+        stays a column index: it is what the estimator finds)."""
+        given = dict(known)
+        if self.theta.unknown in given:
+            raise MttError(
+                f"{self.theta.unknown} is the unknown: Theta does not depend on its value",
+                kind="bad_value",
+            )
+        if self.theta.unknown:  # a placeholder value, never used: no entry depends on it
+            given[self.theta.unknown] = 0
+        substitution = _Values(self.theta).substitution(given)
+        return np.array(
+            [[_numeric(e.xreplace(substitution), "an entry of Theta") for e in row]
+             for row in self.matrix.tolist()]
+        )  # fmt: skip
+
+    def __str__(self) -> str:
+        return report.theta_text(self.theta)
+
+    def _repr_latex_(self) -> str:
+        K = sympy.latex(sympy.Matrix([self.monomials]))
+        return f"$\\displaystyle {report.theta_latex(self.theta)}, \\quad K^T = {K}$"
+
+
+@dataclass(frozen=True)
+class StateSpace:
+    """The descriptor form E x' = A x + B u, y = C x + D u: exact sympy matrices, with
+    x the energy variables (q of each C, p of each I) named in `states`."""
+
+    equations: Equations
+
+    @property
+    def states(self) -> tuple[str, ...]:
+        return self.equations.states
+
+    @cached_property
+    def _matrices(self) -> dict[str, sympy.Matrix]:
+        return self.equations.matrices()
+
+    E = property(lambda self: self._matrices["E"])
+    A = property(lambda self: self._matrices["A"])
+    B = property(lambda self: self._matrices["B"])
+    C = property(lambda self: self._matrices["C"])
+    D = property(lambda self: self._matrices["D"])
+
+    @property
+    def relations(self) -> tuple[tuple[str, sympy.Expr], ...]:
+        """The causal equations, variable = expression (bond variables e1, f1, ...)."""
+        return self.equations.relations
+
+    def __str__(self) -> str:
+        return report.ss_text(self.equations)
+
+    def _repr_latex_(self) -> str:
+        body = ",\\quad ".join(
+            f"{name} = {sympy.latex(matrix)}" for name, matrix in self._matrices.items()
+        )
+        return f"$\\displaystyle {body}$"
+
+
+@dataclass(frozen=True)
+class Causality:
+    """The causal strokes: for each bond, the component that receives its effort."""
+
+    causal: CausalBondGraph
+
+    def _label(self, name: str) -> str:
+        return self.causal.bondgraph.component(name).label
+
+    @property
+    def strokes(self) -> dict[int, str]:
+        """Bond number -> the component (TYPE:NAME) at the end with the causal stroke."""
+        return {
+            bond.number: self._label(self.causal.stroke_at(bond.number))
+            for bond in self.causal.bondgraph.bonds
+        }
+
+    @property
+    def dependent(self) -> tuple[str, ...]:
+        """Storage elements in derivative causality."""
+        return tuple(self._label(name) for name in self.causal.dependent)
+
+    @property
+    def loops(self) -> tuple[str, ...]:
+        """Resistors given an arbitrary causality: each closes an algebraic loop."""
+        return tuple(self._label(name) for name in self.causal.loops)
+
+    def __str__(self) -> str:
+        return describe(self.causal)

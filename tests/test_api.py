@@ -1,0 +1,250 @@
+"""mtt's Python API (mtt.load, Model and its stages) against hand-derived values and the paper."""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+import types
+
+import numpy as np
+import pytest
+import sympy
+from scipy import signal
+
+import mtt
+from mtt.derivation import pipeline
+from mtt.estimator import codegen
+from mtt.language.diagnostics import ModelError
+
+RC = """model rc
+param r = 1000
+unknown c = 1e-6
+Se:v -> 1:loop
+1:loop -> R:r
+1:loop -> 0:out
+0:out -> C:c
+0:out -> De:vc
+"""
+s, k, c, r, tau, L = sympy.symbols("s k c r tau l")  # L is the flow ratio l
+
+
+@pytest.fixture(scope="module")
+def dc_drive() -> mtt.Model:
+    return mtt.load(mtt.example("dc_drive"))
+
+
+def kind_of(call, *args, **kwargs) -> mtt.MttError:
+    with pytest.raises(mtt.MttError) as caught:
+        call(*args, **kwargs)
+    return caught.value
+
+
+# load ----------------------------------------------------------------------------------
+
+
+def test_a_file_name_a_path_and_the_text_give_the_same_model(tmp_path):
+    path = tmp_path / "rc.bg"
+    path.write_text(RC)
+    models = [mtt.load(str(path)), mtt.load(path), mtt.load(RC)]
+    assert [m.transfer_function.expr for m in models] == [1 / (1000 * c * s + 1)] * 3
+    assert [m.source.name for m in models] == [str(path), str(path), "<string>"]
+
+
+def test_set_keep_and_unknowns_choose_the_parameters():
+    assert mtt.load(RC, set={"r": 0.1}).transfer_function.expr == 10 / (c * s + 10)
+    assert mtt.load(RC, set={"r": "1/3"}).transfer_function.expr == 3 / (c * s + 3)
+    assert mtt.load(RC, keep="r").transfer_function.expr == 1 / (c * r * s + 1)
+    assert mtt.load(RC, keep=["r"]).transfer_function.symbols == ("r",)
+    model = mtt.load(RC, unknowns=["r"])
+    assert model.unknowns == ("r",)
+    assert model.transfer_function.expr == 1000000 / (r * s + 1000000)
+    assert mtt.load(RC, input="Se:v", output="De:vc").output == "De:vc"
+
+
+def test_the_paper_dc_drive_transfer_function_and_theta(dc_drive):
+    paper = 10 * (k * s**2 + 1) / ((s**3 + 10 * s**2 + 11 * s + 10) * k * s + s**2 + 10 * s + 10)
+    assert sympy.cancel(dc_drive.transfer_function.expr - paper) == 0
+    assert dc_drive.theta.matrix == sympy.Matrix(
+        [[10, 0], [10, 10], [1, 11], [0, 10], [0, 1], [-10, 0], [0, 0], [0, -10]]
+    )
+    assert dc_drive.theta.monomials == (1, k)
+
+
+def test_the_paper_absorber_theta_with_tau_and_l_kept():
+    theta = mtt.load(mtt.example("absorber"), keep="tau,l").theta
+    assert theta.matrix == sympy.Matrix(
+        [
+            [L, L, L, L],
+            [3 * L * tau, 4 * L * tau, 3 * L * tau, 0],
+            [3 * L * tau**2, 3 * L * tau**2, 0, 0],
+            [L * tau**3, 0, 0, 0],
+            [0, 0, 0, -1],
+        ]
+    )
+    assert theta.monomials == (1, k, k**2, k**3)
+    assert theta.at(tau=2, l=0.5)[3].tolist() == [4.0, 0.0, 0.0, 0.0]
+
+
+def test_at_gives_numeric_coefficients_highest_power_first():
+    tf = mtt.load(RC).transfer_function
+    num, den = tf.at()  # the file's c = 1e-6
+    assert num.tolist() == [1.0] and den.tolist() == [1e-3, 1.0]
+    assert tf.at(c=2e-6)[1].tolist() == [2e-3, 1.0]
+
+
+def test_state_space_is_the_descriptor_form():
+    ss = mtt.load(RC).state_space
+    # q' = (v - q/c)/r, y = q/c with r = 1000
+    assert ss.states == ("q_c",)
+    expected = [[1], [-1 / (1000 * c)], [sympy.Rational(1, 1000)], [1 / c], [0]]
+    matrices = [ss.E, ss.A, ss.B, ss.C, ss.D]
+    assert matrices == [sympy.Matrix([row]) for row in expected]
+
+
+def test_causality_strokes():
+    causality = mtt.load(RC).causality
+    assert causality.strokes == {1: "1:loop", 2: "R:r", 3: "1:loop", 4: "0:out", 5: "De:vc"}
+    assert "1:loop ->| R:r" in str(causality)
+
+
+def test_latex_display():
+    model = mtt.load(RC)
+    assert model.transfer_function._repr_latex_() == (
+        "$\\displaystyle G(s) = \\frac{1}{1000 c s + 1}$"
+    )
+    assert model.theta._repr_latex_() == (
+        "$\\displaystyle \\Theta = \\left[\\begin{matrix}1 & 0\\\\0 & 1000\\\\-1 & 0"
+        "\\end{matrix}\\right], \\quad K^T = \\left[\\begin{matrix}1 & c\\end{matrix}\\right]$"
+    )
+    assert model.state_space._repr_latex_().startswith("$\\displaystyle E = ")
+
+
+# interoperability ----------------------------------------------------------------------
+
+
+def test_to_scipy_has_the_frequency_response_of_the_exact_transfer_function(dc_drive):
+    w = np.array([0.1, 1.0, 3.0, 30.0])
+    _, response = signal.freqresp(dc_drive.to_scipy(10), w)
+    G = sympy.lambdify(s, dc_drive.transfer_function.expr.subs(k, 10))
+    np.testing.assert_allclose(response, G(1j * w), rtol=1e-12)
+
+
+def test_to_control(dc_drive):
+    control = pytest.importorskip("control")
+    G = dc_drive.to_control(10)
+    assert isinstance(G, control.TransferFunction)
+    np.testing.assert_allclose(control.dcgain(G), 1.0)  # G(0) = 10/10
+
+
+def test_to_control_without_python_control_says_how_to_install(dc_drive, monkeypatch):
+    monkeypatch.setitem(sys.modules, "control", None)  # import control -> ImportError
+    error = kind_of(dc_drive.to_control, 10)
+    assert error.kind == "missing_dependency" and "mtt[control]" in str(error)
+
+
+# the estimator -------------------------------------------------------------------------
+
+
+def test_compile_writes_what_mtt_compile_writes(dc_drive, tmp_path):
+    path = dc_drive.compile(tmp_path / "drive.py")
+    expected = codegen.render(pipeline.theta_for(mtt.example("dc_drive")))
+    assert path.read_text() == expected
+
+
+def test_estimator_simulate_and_estimate_delegate_to_the_generated_module(dc_drive):
+    module = dc_drive.estimator()
+    assert module is dc_drive.estimator() and module.N == 1
+    np.testing.assert_array_equal(module.theta(), dc_drive.theta.at())
+    t = np.linspace(0.0, 10.0, 1001)
+    u = np.ones_like(t)
+    y = dc_drive.simulate(t, u, k=10)
+    _, reference, _ = signal.lsim(dc_drive.to_scipy(10), u, t)  # linear interpolation
+    np.testing.assert_allclose(y, reference, atol=1e-6)
+    result = dc_drive.estimate(t, u, y, k0=5.0, beta=0.1, S0=1e-4, C=[1, 5, 10, 10, 5, 1])
+    assert result.k == pytest.approx(10.0, abs=1e-3)  # the paper's Fig. 2
+    error = kind_of(dc_drive.estimate, t, u, y, k0=float("nan"))
+    assert error.kind == "bad_argument" and "k0" in str(error)
+
+
+def test_fit_delegates_to_the_generated_module(monkeypatch):
+    model = mtt.load(RC)
+    calls = []
+    fake = types.SimpleNamespace(fit=lambda *args, **options: calls.append((args, options)))
+    model.__dict__["_estimator"] = fake  # the cached module
+    model.fit(1, 2, 3, k0=4)
+    assert calls == [((1, 2, 3), {"k0": 4})]
+    model.__dict__["_estimator"] = types.SimpleNamespace()
+    assert kind_of(model.fit, 1, 2, 3).kind == "unsupported"
+
+
+# errors --------------------------------------------------------------------------------
+
+
+def test_model_errors_are_mtt_errors_located_at_the_first_error():
+    error = kind_of(mtt.load, "model broken\nparam r = 1 +\nSe:v -> 1:j\n")
+    assert isinstance(error, ModelError)
+    assert (error.kind, error.file, error.line) == ("syntax", "<string>", 2)
+    assert error.column is not None
+    assert kind_of(mtt.load, "no/such/file.bg").kind == "io"
+
+
+@pytest.mark.parametrize(
+    ("options", "kind", "says"),
+    [
+        ({"unknowns": ["r", "c"]}, "unsupported", "several unknowns"),
+        ({"input": "Sf:x"}, "unsupported", "input='Sf:x'"),
+        ({"set": {"x": 1}}, "undeclared_parameter", "'x'"),
+        ({"set": {"r": float("inf")}}, "bad_value", "finite"),
+        ({"set": {"r": True}}, "bad_value", "expected a number"),
+        ({"set": {"r": "abc"}}, "undeclared_parameter", "'abc'"),
+        ({"keep": ["x"]}, "undeclared_parameter", "'x'"),
+        ({"unknowns": "x"}, "undeclared_parameter", "x"),
+    ],
+)
+def test_bad_options_are_mtt_errors(options, kind, says):
+    error = kind_of(mtt.load, RC, **options)
+    assert error.kind == kind and says in str(error)
+
+
+@pytest.mark.parametrize(
+    ("values", "kind"),
+    [
+        ({"x": 1}, "undeclared_parameter"),
+        ({"r": 1}, "substituted_parameter"),
+        ({"c": float("nan")}, "bad_value"),
+        ({"c": 10**400}, "out_of_range"),
+        ({"c": "sqrt(-1)"}, "bad_value"),
+    ],
+)
+def test_bad_values_are_mtt_errors(values, kind):
+    assert kind_of(mtt.load(RC).transfer_function.at, **values).kind == kind
+
+
+def test_a_parameter_without_a_value_must_be_given():
+    model = mtt.load(RC.replace("unknown c = 1e-6", "unknown c"))
+    error = kind_of(model.transfer_function.at)
+    assert error.kind == "missing_value" and "pass c=VALUE" in str(error)
+    assert model.transfer_function.at(c=1)[1].tolist() == [1000.0, 1.0]
+
+
+def test_theta_needs_an_unknown():
+    model = mtt.load(RC.replace("unknown c", "param c"))
+    assert kind_of(lambda: model.theta).kind == "no_unknown"
+
+
+# import ---------------------------------------------------------------------------------
+
+
+def test_import_mtt_is_light_until_the_api_is_used():
+    probe = (
+        "import json, sys, mtt\n"
+        "before = 'sympy' in sys.modules\n"
+        "names = dir(mtt)\n"
+        "mtt.load\n"
+        "print(json.dumps([before, 'sympy' in sys.modules, names]))\n"
+    )
+    output = subprocess.run([sys.executable, "-c", probe], capture_output=True, text=True)
+    before, after, names = json.loads(output.stdout)
+    assert (before, after) == (False, True)
+    assert set(mtt.__all__) <= set(names)
