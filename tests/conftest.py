@@ -10,13 +10,17 @@ from pathlib import Path
 
 import pytest
 
-from mtt.language.bondgraph import BondGraph, build
+from mtt.language.bondgraph import BondGraph, Selection, build
 from mtt.language.diagnostics import ModelError, Source
 from mtt.language.parse import ParsedModel, parse
 
 ROOT = Path(__file__).resolve().parent.parent
 DATA = Path(__file__).resolve().parent / "data"
 MODELS = sorted((ROOT / "models").glob("*.bg"))
+
+
+def _selection(unknown: str | None) -> Selection:
+    return Selection(None if unknown is None else tuple(unknown.split(",")))
 
 
 class Models:
@@ -28,13 +32,13 @@ class Models:
 
     @staticmethod
     def build(text: str, unknown: str | None = None) -> BondGraph:
-        return build(parse(Source("test.bg", text)), unknown=unknown)
+        return build(parse(Source("test.bg", text)), _selection(unknown))
 
     @staticmethod
     def failure(text: str, unknown: str | None = None) -> ModelError:
         """The ModelError that reading `text` raises (the test fails if there is none)."""
         with pytest.raises(ModelError) as caught:
-            build(parse(Source("test.bg", text)), unknown=unknown)
+            build(parse(Source("test.bg", text)), _selection(unknown))
         return caught.value
 
 

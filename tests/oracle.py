@@ -27,7 +27,7 @@ import sympy
 from sympy.polys.matrices import DomainMatrix
 
 from mtt.derivation.pipeline import load
-from mtt.language.bondgraph import BondGraph
+from mtt.language.bondgraph import BondGraph, Selection
 
 S = sympy.Symbol("s")
 
@@ -51,7 +51,7 @@ def parameter_values(
     kept = {
         name
         for name, value in raw.items()
-        if value is None or symbolic or name in set(keep) or name == graph.unknown
+        if value is None or symbolic or name in set(keep) or name in graph.unknowns
     }
     values: dict[sympy.Symbol, sympy.Expr] = {}
     for name in kept:
@@ -140,5 +140,5 @@ def oracle_tf(
     overrides: Mapping[str, sympy.Expr] | None = None,
 ) -> sympy.Expr:
     """The transfer function of the model file at `path`, derived independently of mtt."""
-    graph = load(path, unknown=unknown)
+    graph = load(path, Selection(None if unknown is None else (unknown,)))
     return transfer(graph, parameter_values(graph, keep, symbolic, overrides))

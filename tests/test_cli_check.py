@@ -32,7 +32,7 @@ RECORD_KEYS = {
     "input",
     "output",
 }
-DIAGNOSTIC_KEYS = {"kind", "line", "column", "message"}
+DIAGNOSTIC_KEYS = {"file", "kind", "line", "column", "message", "notes"}
 
 
 def relative(path: Path) -> str:
@@ -48,7 +48,8 @@ def assert_record_shape(record: dict) -> None:
         assert isinstance(record[key], list)
         for item in record[key]:
             assert set(item) == DIAGNOSTIC_KEYS
-            assert isinstance(item["kind"], str)
+            assert isinstance(item["kind"], str) and isinstance(item["file"], str)
+            assert isinstance(item["notes"], list)
             assert isinstance(item["message"], str) and item["message"]
             assert (item["line"] is None) == (item["column"] is None)
             for place in ("line", "column"):
@@ -144,23 +145,32 @@ def test_check_json_on_every_error_file_and_a_missing_one(runs):
     by_file = {Path(r["file"]).stem: r for r in records}
     assert by_file["file"]["errors"] == [
         {
+            "file": by_file["file"]["file"],
             "kind": "io",
             "line": None,
             "column": None,
             "message": "cannot read the file: No such file or directory",
+            "notes": [],
         }
     ]
     assert by_file["file"]["model"] is None
     assert by_file["self_bond"]["errors"] == [
-        {"kind": "self_bond", "line": 6, "column": 5, "message": "a bond from 1:j to itself"}
+        {
+            "file": by_file["self_bond"]["file"],
+            "kind": "self_bond",
+            "line": 6,
+            "column": 5,
+            "message": "a bond from 1:j to itself",
+            "notes": [],
+        }
     ]
     assert by_file["no_input_none"]["errors"][0]["line"] is None
     # what a file that parses but fails validation still tells
-    unknowns = by_file["several_unknowns"]
+    unknowns = by_file["unconnected_unknowns"]
     assert unknowns["model"] == "unknowns"
     assert unknowns["parameters"] == {"r": "2", "a": "1", "b": "2", "c": None}
     assert unknowns["unknown"] == ["a", "b", "c"]
-    assert (unknowns["components"], unknowns["bonds"]) == (4, 3)
+    assert (unknowns["components"], unknowns["bonds"]) == (5, 3)
     assert (unknowns["input"], unknowns["output"]) == (None, None)
     # a file that does not parse tells nothing about its content
     syntax = by_file["syntax"]
@@ -188,7 +198,7 @@ def test_check_text_exit_codes_and_no_traceback(runs):
     assert bad.stdout.startswith("models/rlc.bg: ok")  # the valid file is still checked
     assert "tests/data/errors/self_bond.bg:6:5: error[self_bond]: " in bad.stderr
     assert "no/such/file.bg: error[io]: cannot read the file" in bad.stderr
-    assert "tests/data/errors/several_kinds.bg: 10 errors" in bad.stderr
+    assert "tests/data/errors/several_kinds.bg: 9 errors" in bad.stderr
 
 
 def test_show_and_version(runs):
@@ -249,17 +259,17 @@ def test_show_lists_parameters_components_numbered_bonds_and_ports(capsys):
 
 
 def test_show_unknown_option_and_model_errors(capsys):
-    several = str(DATA / "errors" / "several_unknowns.bg")
-    assert main(["show", several]) == 2
-    captured = capsys.readouterr()
-    assert captured.out == ""
-    assert "error[several_unknowns]" in captured.err
+    several = str(DATA / "valid" / "several_unknowns.bg")
+    assert main(["show", several]) == 0
+    assert capsys.readouterr().out.splitlines()[-1] == "unknown a, b, c"
     assert main(["show", "--unknown", "b", several]) == 0
     assert capsys.readouterr().out.splitlines()[-1] == "unknown b"
 
 
 def test_check_unknown_option(capsys):
-    several = str(DATA / "errors" / "several_unknowns.bg")
+    several = str(DATA / "valid" / "several_unknowns.bg")
+    assert main(["check", several]) == 0
+    assert capsys.readouterr().out.strip().endswith(", unknowns a, b, c")
     assert main(["check", "--unknown", "c", several]) == 0
     assert capsys.readouterr().out.strip().endswith(", unknown c")
     assert main(["check", "--json", "--unknown", "c", several]) == 0

@@ -19,8 +19,8 @@ MODELS = ROOT / "models"
 SYSTEMS = Path(__file__).resolve().parent / "data" / "systems"
 
 DC_DRIVE_THETA = [[10, 0], [10, 10], [1, 11], [0, 10], [0, 1], [-10, 0], [0, 0], [0, -10]]
-JSON_KEYS = ["model", "input", "output", "unknown", "symbols", "num", "den", "n", "m", "N",
-             "theta", "order"]  # fmt: skip
+JSON_KEYS = ["model", "input", "output", "unknown", "unknowns", "monomials", "degrees", "symbols",
+             "num", "den", "n", "m", "N", "theta", "order"]  # fmt: skip
 
 
 def run(capsys, *argv) -> tuple[int, str, str]:
@@ -52,7 +52,10 @@ def check_json_shape(record: dict) -> None:
     assert isinstance(record["num"], str) and isinstance(record["den"], str)
     assert all(isinstance(record[key], int) for key in ("n", "m", "N", "order"))
     assert len(record["theta"]) == record["n"] + record["m"] + 2
-    assert all(len(row) == record["N"] + 1 for row in record["theta"])
+    assert all(len(row) == len(record["monomials"]) for row in record["theta"])
+    assert record["unknowns"] == ([record["unknown"]] if record["unknown"] else record["unknowns"])
+    assert all(len(monomial) == len(record["unknowns"]) for monomial in record["monomials"])
+    assert set(record["degrees"]) == set(record["unknowns"])
     assert all(isinstance(e, str) for row in record["theta"] for e in row)
     assert "^" not in record["num"] + record["den"]  # sympy syntax: powers are **
 
@@ -94,6 +97,9 @@ def test_tf_symbolic_rlc_json(mtt):
         "input": "Se:v",
         "output": "Df:i",
         "unknown": "c",
+        "unknowns": ["c"],
+        "monomials": [[0], [1]],
+        "degrees": {"c": 1},
         "symbols": ["r", "l"],
         "num": "c*s",
         "den": "c*l*s**2 + c*r*s + 1",
@@ -272,3 +278,100 @@ def test_malformed_set_is_a_usage_error(capsys, value):
         main(["tf", str(MODELS / "rlc.bg"), "--set", value])
     assert caught.value.code == 2
     assert "--set" in capsys.readouterr().err
+
+
+# --- several unknowns ----------------------------------------------------------------------
+
+
+def test_theta_of_two_unknowns_labels_the_monomials(capsys):
+    status, out, _ = run(capsys, "theta", MODELS / "dc_motor.bg")
+    assert status == EXIT_OK
+    lines = out.splitlines()
+    assert lines[0] == "model dc_motor: from Se:v to Df:speed; unknowns ra, jl; symbolic none"
+    assert "total degree 2 (in ra 1, jl 1)" in out and "columns 1, ra, jl, ra*jl" in out
+    assert lines[4].split() == ["1", "ra", "jl", "ra*jl"]
+    assert table(out) == [["100", "10", "0", "0"], ["1", "100", "0", "100"],
+                          ["10", "0", "10", "0"], ["-100", "0", "0", "0"]]  # fmt: skip
+
+
+def test_theta_json_of_unknowns_chosen_on_the_command_line(capsys):
+    status, out, _ = run(capsys, "theta", MODELS / "dc_motor.bg", "--unknown", "jl,ra", "--json")
+    assert status == EXIT_OK
+    record = json.loads(out)
+    check_json_shape(record)
+    assert (record["unknown"], record["unknowns"], record["N"]) == (None, ["jl", "ra"], 2)
+    assert record["monomials"] == [[0, 0], [1, 0], [0, 1], [1, 1]]
+    assert record["degrees"] == {"jl": 1, "ra": 1}
+    assert record["theta"][1] == ["1", "0", "100", "100"]
+    # one of them: the other keeps its value, and the record reads as version 1's
+    status, out, _ = run(capsys, "theta", MODELS / "dc_motor.bg", "--unknown", "jl", "--json")
+    record = json.loads(out)
+    assert (record["unknown"], record["unknowns"], record["N"]) == ("jl", ["jl"], 1)
+    assert (record["monomials"], record["degrees"]) == ([[0], [1]], {"jl": 1})
+
+
+def test_compile_refuses_several_unknowns(capsys, tmp_path):
+    target = tmp_path / "dc_motor.py"
+    status, out, err = run(capsys, "compile", MODELS / "dc_motor.bg", "-o", target)
+    assert status == EXIT_MODEL_ERROR and out == "" and not target.exists()
+    assert err.startswith(f"{MODELS / 'dc_motor.bg'}: error[several_unknowns]: ")
+    assert "(ra, jl): choose one with --unknown NAME" in err
+    assert run(capsys, "compile", MODELS / "dc_motor.bg", "-o", target, "--unknown", "jl")[0] == 0
+    assert "UNKNOWN = 'jl'" in target.read_text()
+
+
+# --- the input and output chosen on the command line --------------------------------------
+
+SEVERAL_PORTS = SYSTEMS / "several_ports.bg"
+
+
+@pytest.mark.parametrize(
+    "options,expected",
+    [
+        # the file's choice, Se:v to De:vc: the divider r against g || C (r = 2)
+        ([], "g / (2*c*g*s + g + 2)"),
+        # the leak current into r || g || C, with the voltage sources shorted
+        (["--input", "Sf:leak"], "2*g / (2*c*g*s + g + 2)"),
+        # the loop current it drives back through r: -vc/r
+        (["--input", "Sf:leak", "--output", "Df:current"], "-g / (2*c*g*s + g + 2)"),
+        # the bias source drives the loop current through r and g || C
+        (["--input", "Se:bias", "--output", "Df:current"], "(c*g*s + 1) / (2*c*g*s + g + 2)"),
+    ],
+)
+def test_input_and_output_options_choose_the_transfer_function(capsys, options, expected):
+    status, out, err = run(capsys, "tf", SEVERAL_PORTS, *options)
+    assert status == EXIT_OK, err
+    assert out.splitlines()[-1] == f"  G(s) = {expected}"
+
+
+def test_input_and_output_options_apply_to_every_command(capsys):
+    status, out, _ = run(capsys, "show", SEVERAL_PORTS, "--input", "Sf:leak")
+    assert status == EXIT_OK and "input   Sf:leak" in out
+    status, out, _ = run(capsys, "check", SEVERAL_PORTS, "--output", "Df:current")
+    assert status == EXIT_OK and "input Se:v, output Df:current" in out
+    status, out, _ = run(capsys, "theta", SEVERAL_PORTS, "--input", "Sf:leak", "--json")
+    assert json.loads(out)["input"] == "Sf:leak"
+
+
+@pytest.mark.parametrize(
+    "options,kind,message",
+    [
+        (["--input", "Df:current"], "no_input", "Df:current (chosen with --input) is not a source"),
+        (["--output", "Se:v"], "no_output", "Se:v (chosen with --output) is not a detector"),
+        (["--output", "De:nope"], "undeclared_component",
+         "De:nope (chosen with --output) does not exist"),
+        (["--input", "Sf:v"], "undeclared_component",
+         "Sf:v (chosen with --input) does not exist (it is Se:v)"),
+    ],
+)  # fmt: skip
+def test_input_and_output_options_naming_the_wrong_component(capsys, options, kind, message):
+    status, out, err = run(capsys, "tf", SEVERAL_PORTS, *options)
+    assert (status, out) == (EXIT_MODEL_ERROR, "")
+    assert err.strip() == f"{SEVERAL_PORTS}: error[{kind}]: {message}"
+
+
+def test_input_option_needs_type_and_name(capsys):
+    with pytest.raises(SystemExit) as done:
+        main(["tf", str(SEVERAL_PORTS), "--input", "leak"])
+    assert done.value.code == 2
+    assert "argument --input: expected TYPE:NAME, not 'leak'" in capsys.readouterr().err

@@ -309,7 +309,7 @@ def test_inline_declarations_with_arguments_in_a_chain(models):
     assert graph.component("cs").argument.value == 1 / Symbol("ks")
     assert graph.component("rl").argument.value == 2 * k + Rational(1, 2)
     assert graph.component("jl").argument.position == Position(4, 21)
-    assert graph.unknown == "k"
+    assert graph.unknowns == ("k",)
 
 
 def test_an_omitted_argument_means_the_parameter_of_the_same_name(models):

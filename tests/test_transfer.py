@@ -33,7 +33,7 @@ def symbols(names: str):
 
 def choice(unknown=None, keep=(), symbolic=False, **overrides) -> ParameterChoice:
     return ParameterChoice(
-        unknown=unknown,
+        unknowns=None if unknown is None else (unknown,),
         keep=frozenset(keep),
         symbolic=symbolic,
         overrides=MappingProxyType({k: sympy.sympify(v) for k, v in overrides.items()}),
@@ -228,7 +228,7 @@ def test_option_unknown_chooses_another_parameter():
     r_ = sympy.Symbol("r")
     tf = transfer_for(ROOT / "models" / "rlc.bg", choice(unknown="r"))
     assert_tf(tf, 2 * s, s**2 + 2 * r_ * s + 20)
-    assert tf.equations.parametrisation.unknown == "r"
+    assert tf.equations.parametrisation.unknowns == ("r",)
     assert tf.gens == (s, r_)
 
 
@@ -267,7 +267,7 @@ def test_model_without_unknown_still_has_a_transfer_function(tmp_path):
     text = (SYSTEMS / "rc_lowpass.bg").read_text().replace("unknown c", "param c")
     tf = transfer_for(model_file(tmp_path, text))  # c = 1/10: 1/(s/5 + 1)
     assert_tf(tf, 5, s + 5)
-    assert tf.equations.parametrisation.unknown is None
+    assert tf.equations.parametrisation.unknowns == ()
 
 
 @pytest.mark.parametrize(

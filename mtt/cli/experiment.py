@@ -212,8 +212,8 @@ def guarded(action: Callable[[argparse.Namespace], int]) -> Callable[[argparse.N
 def cmd_compile(args) -> int:
     theta = pipeline.theta_for(args.file, choice_from_args(args))
     source = codegen.render(theta)
-    path = Path(args.output) if args.output else codegen.default_path(theta)
-    if not args.output:
+    path = Path(args.path) if args.path else codegen.default_path(theta)
+    if not args.path:
         path.parent.mkdir(parents=True, exist_ok=True)
     codegen.write_atomic(path, source)
     kept = f", {', '.join(theta.symbols)} kept symbolic" if theta.symbols else ""

@@ -64,7 +64,11 @@ def register(commands) -> None:
     )
     compile_.add_argument("file", metavar="FILE")
     compile_.add_argument(
-        "-o", "--output", metavar="PATH", help="where to write it (default generated/MODEL.py)"
+        "-o",
+        "--out",
+        metavar="PATH",
+        dest="path",
+        help="where to write it (default generated/MODEL.py)",
     )
     add_parameter_options(compile_)
     compile_.set_defaults(run=_implementation("cmd_compile"))

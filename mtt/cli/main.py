@@ -16,7 +16,12 @@ from typing import TYPE_CHECKING
 
 from mtt import __version__
 from mtt.cli import experiment_args
-from mtt.cli.options import add_parameter_options, choice_from_args
+from mtt.cli.options import (
+    add_parameter_options,
+    add_selection_options,
+    choice_from_args,
+    selection_from_args,
+)
 from mtt.language.diagnostics import ModelError
 
 if TYPE_CHECKING:
@@ -65,11 +70,11 @@ def _summary(
         record["components"] = graph.graph.number_of_nodes()
         record["input"] = graph.component(graph.input).label
         record["output"] = graph.component(graph.output).label
-        record["unknown"] = [graph.unknown] if graph.unknown else []
+        record["unknown"] = list(graph.unknowns)
     return record
 
 
-def _check_one(file: str, unknown: str | None) -> tuple[dict, ModelError | None, BondGraph | None]:
+def _check_one(file: str, args) -> tuple[dict, ModelError | None, BondGraph | None]:
     from mtt.derivation.pipeline import read_source
     from mtt.language.bondgraph import build
     from mtt.language.parse import parse
@@ -79,7 +84,7 @@ def _check_one(file: str, unknown: str | None) -> tuple[dict, ModelError | None,
     try:
         source = read_source(file)
         parsed = parse(source)
-        graph = build(parsed, unknown=unknown)
+        graph = build(parsed, selection_from_args(args))
     except ModelError as exc:
         problem = exc
     return _summary(file, parsed, graph, problem), problem, graph
@@ -88,7 +93,7 @@ def _check_one(file: str, unknown: str | None) -> tuple[dict, ModelError | None,
 def cmd_check(args) -> int:
     status = EXIT_OK
     for file in args.files:
-        record, problem, graph = _check_one(file, args.unknown)
+        record, problem, graph = _check_one(file, args)
         if problem is not None:
             status = EXIT_MODEL_ERROR
         if args.json:
@@ -101,7 +106,8 @@ def cmd_check(args) -> int:
             continue
         for note in graph.warnings:
             print(graph.source.render(note), file=sys.stderr)
-        unknown = f", unknown {graph.unknown}" if graph.unknown else ""
+        unknowns = graph.unknowns
+        unknown = f", unknown{'s' * (len(unknowns) > 1)} {', '.join(unknowns)}" if unknowns else ""
         print(
             f"{file}: ok: model {graph.name}, {record['components']} components, "
             f"{record['bonds']} bonds, input {record['input']}, output {record['output']}"
@@ -129,7 +135,7 @@ def describe(graph: BondGraph) -> str:
         rows = []
         for p in graph.parameters.values():
             value = "(no value: symbolic)" if p.value is None else f"= {p.value.value}"
-            role = "unknown" if p.name == graph.unknown else "known"
+            role = "unknown" if p.name in graph.unknowns else "known"
             rows.append((p.name, value, role, p.description or ""))
         lines += _table(rows)
     counts = summary_counts(graph)
@@ -152,7 +158,7 @@ def describe(graph: BondGraph) -> str:
         "",
         f"input   {graph.component(graph.input).label}",
         f"output  {graph.component(graph.output).label}",
-        f"unknown {graph.unknown or '(none)'}",
+        f"unknown {', '.join(graph.unknowns) or '(none)'}",
     ]
     return "\n".join(lines)
 
@@ -161,7 +167,7 @@ def _load(args) -> BondGraph:
     """The file's bond graph; its warnings go to stderr, its errors raise `ModelError`."""
     from mtt.derivation.pipeline import load
 
-    graph = load(args.file, unknown=getattr(args, "unknown", None))
+    graph = load(args.file, selection_from_args(args))
     for note in graph.warnings:
         print(graph.source.render(note), file=sys.stderr)
     return graph
@@ -203,7 +209,7 @@ def _derived(args, text, latex) -> int:
 
     equations = _equations(args)
     theta = theta_matrix(transfer_function(equations))
-    if args.command == "theta" and theta.unknown is None:
+    if args.command == "theta" and not theta.unknowns:
         raise ModelError(equations.causal.bondgraph.source, [NO_UNKNOWN])
     if args.json:
         causal = equations.causal
@@ -245,7 +251,7 @@ def make_parser() -> argparse.ArgumentParser:
     )
     check.add_argument("files", nargs="+", metavar="FILE")
     check.add_argument("--json", action="store_true", help="print one JSON object per file")
-    check.add_argument("--unknown", metavar="NAME", help="the parameter to identify")
+    add_selection_options(check)
     check.set_defaults(run=cmd_check)
 
     show = commands.add_parser(
@@ -254,7 +260,7 @@ def make_parser() -> argparse.ArgumentParser:
         description="Print a model's parameters, components, numbered bonds, input and output.",
     )
     show.add_argument("file", metavar="FILE")
-    show.add_argument("--unknown", metavar="NAME", help="the parameter to identify")
+    add_selection_options(show)
     show.set_defaults(run=cmd_show)
 
     causality = commands.add_parser(
@@ -264,7 +270,7 @@ def make_parser() -> argparse.ArgumentParser:
         "then free resistors) and print every bond with its causal stroke.",
     )
     causality.add_argument("file", metavar="FILE")
-    causality.add_argument("--unknown", metavar="NAME", help="the parameter to identify")
+    add_selection_options(causality)
     causality.set_defaults(run=cmd_causality)
 
     for name, run, summary in (

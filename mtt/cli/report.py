@@ -23,17 +23,15 @@ def in_powers_of_s(expression: sympy.Expr) -> str:
         elif c == -1:
             terms.append(f"-{monomial}")
         else:
-            text = f"({c})" if isinstance(c, sympy.Add) else str(c)
-            terms.append(f"{text}*{monomial}")
+            terms.append(f"{_grouped(c)}*{monomial}")
     return " + ".join(terms).replace("+ -", "- ") or "0"
 
 
 def _heading(theta: Theta) -> str:
     symbols = ", ".join(theta.symbols) or "none"
-    unknown = theta.unknown or "none"
+    unknowns = f"unknown{'s' * (len(theta.unknowns) > 1)} {', '.join(theta.unknowns) or 'none'}"
     return (
-        f"model {theta.model}: from {theta.input} to {theta.output}; unknown {unknown}; "
-        f"symbolic {symbols}"
+        f"model {theta.model}: from {theta.input} to {theta.output}; {unknowns}; symbolic {symbols}"
     )
 
 
@@ -53,9 +51,14 @@ def tf_text(theta: Theta) -> str:
         f"  numerator   (m = {theta.m}):  {in_powers_of_s(theta.num)}",
         f"  denominator (n = {theta.n}):  {in_powers_of_s(theta.den)}",
         "",
-        f"  G(s) = {sympy.factor(theta.num)} / ({sympy.factor(theta.den)})",
+        f"  G(s) = {_grouped(sympy.factor(theta.num))} / ({sympy.factor(theta.den)})",
     ]
     return "\n".join(lines)
+
+
+def _grouped(expression: sympy.Expr) -> str:
+    """The expression as text, in parentheses when it is a sum."""
+    return f"({expression})" if isinstance(expression, sympy.Add) else str(expression)
 
 
 def tf_latex(theta: Theta) -> str:
@@ -63,13 +66,8 @@ def tf_latex(theta: Theta) -> str:
     return f"G(s) = \\frac{{{sympy.latex(num)}}}{{{sympy.latex(den)}}}"
 
 
-def _column_labels(theta: Theta) -> list[str]:
-    k = theta.unknown or "1"
-    return ["1", k] + [f"{k}^{j}" for j in range(2, theta.N + 1)] if theta.N else ["1"]
-
-
 def theta_text(theta: Theta) -> str:
-    labels = _column_labels(theta)
+    labels = theta.column_labels
     cells = [[str(entry) for entry in theta.matrix.row(i)] for i in range(theta.matrix.rows)]
     rows = [["", *labels]] + [
         [label, *row] for label, row in zip(theta.row_labels, cells, strict=True)
@@ -80,7 +78,7 @@ def theta_text(theta: Theta) -> str:
     if theta.assumed:
         lines.append(_assumed(theta))
     lines += [
-        f"Theta: n = {theta.n}, m = {theta.m}, N = {theta.N}; rows "
+        f"Theta: n = {theta.n}, m = {theta.m}, {_degrees(theta)}; rows "
         f"{theta.row_labels[0]}..{theta.row_labels[theta.n]}, "
         f"{'..'.join(dict.fromkeys((theta.row_labels[theta.n + 1], theta.row_labels[-1])))}; "
         f"columns {', '.join(labels)}",
@@ -88,6 +86,13 @@ def theta_text(theta: Theta) -> str:
         *table,
     ]
     return "\n".join(lines)
+
+
+def _degrees(theta: Theta) -> str:
+    if len(theta.unknowns) <= 1:
+        return f"N = {theta.N}"
+    each = ", ".join(f"{name} {degree}" for name, degree in theta.degrees.items())
+    return f"total degree {theta.N} (in {each})"
 
 
 def theta_latex(theta: Theta) -> str:
@@ -101,6 +106,9 @@ def derived_json(theta: Theta, order: int) -> dict:
         "input": theta.input,
         "output": theta.output,
         "unknown": theta.unknown,
+        "unknowns": list(theta.unknowns),
+        "monomials": [list(monomial) for monomial in theta.monomials],
+        "degrees": theta.degrees,
         "symbols": list(theta.symbols),
         "num": str(theta.num),
         "den": str(theta.den),

@@ -67,15 +67,16 @@ def _coefficient_domain(values: list[sympy.Expr], free: tuple[str, ...]) -> Doma
 
 
 def _parameter_values(causal: CausalBondGraph, parametrisation: Parametrisation) -> dict:
-    """Each component's exact parameter value, checked to be rational in the unknown."""
+    """Each component's exact parameter value, checked to be rational in every unknown."""
     graph = causal.bondgraph
     problems, values = [], {}
-    unknown = sympy.Symbol(parametrisation.unknown) if parametrisation.unknown else None
+    unknowns = [sympy.Symbol(name) for name in parametrisation.unknowns]
     for component in graph.components:
         if component.argument is None:
             continue
         value = parametrisation.apply(component.argument.value)
         where = component.argument.position
+        irrational = [k for k in unknowns if not value.is_rational_function(k)]
         if value.has(sympy.zoo, sympy.oo, sympy.nan):
             problems.append(
                 error(
@@ -85,13 +86,13 @@ def _parameter_values(causal: CausalBondGraph, parametrisation: Parametrisation)
                     where,
                 )
             )
-        elif unknown is not None and not value.is_rational_function(unknown):
+        elif irrational:
             problems.append(
                 error(
                     "non_rational_unknown",
                     f"the parameter of "
                     f"{component.label} is {value}, not a rational function of "
-                    f"the unknown {unknown}",
+                    f"the unknown {irrational[0]}",
                     where,
                 )
             )

@@ -1,6 +1,6 @@
 """Which parameters stay symbolic and what the others are worth, exactly.
 
-The equations are written in the unknown and the kept symbols only: every other
+The equations are written in the unknowns and the kept symbols only: every other
 parameter is replaced by its value from the file (or from --set), resolved through
 the parameters it names.
 """
@@ -13,31 +13,39 @@ from types import MappingProxyType
 
 import sympy
 
-from mtt.language.bondgraph import BondGraph
+from mtt.language.bondgraph import BondGraph, Selection
 from mtt.language.diagnostics import ModelError, error
 
 
 @dataclass(frozen=True)
 class ParameterChoice:
-    """Which parameter is identified, which stay symbolic, and which values are overridden.
+    """What the user chooses over the file: the unknowns (in order), the input and output,
+    which parameters stay symbolic, and which values are overridden.
 
     By default every parameter with a value in the file is substituted exactly and
-    the others stay symbolic; the unknown always stays symbolic.
+    the others stay symbolic; the unknowns always stay symbolic.
     """
 
-    unknown: str | None = None
+    unknowns: tuple[str, ...] | None = None  # None: the model's `unknown` declarations
     keep: frozenset[str] = frozenset()
     symbolic: bool = False
     overrides: MappingProxyType = field(default_factory=lambda: MappingProxyType({}))
+    input: str | None = None  # TYPE:NAME, over the file's `input` statement
+    output: str | None = None
+
+    @property
+    def selection(self) -> Selection:
+        """The part of the choice that building the bond graph needs."""
+        return Selection(self.unknowns, self.input, self.output)
 
 
 @dataclass(frozen=True)
 class Parametrisation:
-    unknown: str | None
-    symbols: tuple[str, ...]  # kept symbolic, in file order (the unknown not included)
+    unknowns: tuple[str, ...]  # in the order chosen
+    symbols: tuple[str, ...]  # kept symbolic, in model order (the unknowns not included)
     assumed: MappingProxyType  # name -> exact value substituted
     defaults: MappingProxyType  # kept symbol -> its numeric value from the file, or None
-    true_value: sympy.Expr | None  # the unknown's value from the file or --set
+    true_values: MappingProxyType  # unknown -> its value from the file or --set, or None
     substitution: MappingProxyType  # Symbol -> value, for every assumed parameter
 
     def apply(self, expression: sympy.Expr) -> sympy.Expr:
@@ -45,8 +53,8 @@ class Parametrisation:
 
     @property
     def free(self) -> tuple[str, ...]:
-        """The names the equations are written in: the unknown first, then the symbols."""
-        return ((self.unknown,) if self.unknown else ()) + self.symbols
+        """The names the equations are written in: the unknowns first, then the symbols."""
+        return self.unknowns + self.symbols
 
 
 def parametrise(graph: BondGraph, choice: ParameterChoice) -> Parametrisation:
@@ -59,7 +67,7 @@ def parametrise(graph: BondGraph, choice: ParameterChoice) -> Parametrisation:
     ]
     if problems:
         raise ModelError(graph.source, problems)
-    unknown = graph.unknown
+    unknowns = graph.unknowns
     values = {
         name: choice.overrides.get(name, p.value.value if p.value is not None else None)
         for name, p in graph.parameters.items()
@@ -67,7 +75,7 @@ def parametrise(graph: BondGraph, choice: ParameterChoice) -> Parametrisation:
     symbolic = {
         name
         for name, value in values.items()
-        if value is None or choice.symbolic or name in choice.keep or name == unknown
+        if value is None or choice.symbolic or name in choice.keep or name in unknowns
     }
 
     @cache
@@ -87,12 +95,12 @@ def parametrise(graph: BondGraph, choice: ParameterChoice) -> Parametrisation:
         return value.xreplace(replacements)
 
     assumed = {n: resolved(n, True) for n in graph.parameters if n not in symbolic}
-    symbols = tuple(n for n in graph.parameters if n in symbolic and n != unknown)
+    symbols = tuple(n for n in graph.parameters if n in symbolic and n not in unknowns)
     return Parametrisation(
-        unknown=unknown,
+        unknowns=unknowns,
         symbols=symbols,
         assumed=MappingProxyType(assumed),
         defaults=MappingProxyType({n: resolved(n, False) for n in symbols}),
-        true_value=resolved(unknown, False) if unknown else None,
+        true_values=MappingProxyType({n: resolved(n, False) for n in unknowns}),
         substitution=MappingProxyType({sympy.Symbol(n): v for n, v in assumed.items()}),
     )

@@ -9,7 +9,7 @@ from mtt.derivation.equations import Equations, derive
 from mtt.derivation.parameters import ParameterChoice, parametrise
 from mtt.derivation.theta import Theta, theta_matrix
 from mtt.derivation.transfer import TransferFunction, transfer_function
-from mtt.language.bondgraph import BondGraph, build
+from mtt.language.bondgraph import BondGraph, Selection, build
 from mtt.language.diagnostics import ModelError, Source, error
 from mtt.language.parse import parse
 
@@ -27,16 +27,16 @@ def read_source(path: str | Path) -> Source:
         ) from None
 
 
-def load(path: str | Path, unknown: str | None = None) -> BondGraph:
+def load(path: str | Path, selection: Selection | None = None) -> BondGraph:
     """Text -> parse tree -> validated bond graph."""
-    return build(parse(read_source(path)), unknown=unknown)
+    return build(parse(read_source(path)), selection)
 
 
 DEFAULT_CHOICE = ParameterChoice()
 NO_UNKNOWN = error(
     "no_unknown",
-    "the model declares no unknown parameter: declare one with 'unknown NAME' or choose one "
-    "with --unknown NAME",
+    "the model declares no unknown parameter: declare one with 'unknown NAME' or choose "
+    "with --unknown NAME[,NAME...]",
 )
 
 
@@ -47,12 +47,12 @@ def equations_for(graph: BondGraph, choice: ParameterChoice = DEFAULT_CHOICE) ->
 
 def transfer_for(path: str | Path, choice: ParameterChoice = DEFAULT_CHOICE) -> TransferFunction:
     """Text -> ... -> exact canonical transfer function."""
-    return transfer_function(equations_for(load(path, unknown=choice.unknown), choice))
+    return transfer_function(equations_for(load(path, choice.selection), choice))
 
 
 def theta_for(path: str | Path, choice: ParameterChoice = DEFAULT_CHOICE) -> Theta:
     """Text -> ... -> Theta: everything a generated estimator needs (so, an unknown)."""
     theta = theta_matrix(transfer_for(path, choice))
-    if theta.unknown is None:
+    if not theta.unknowns:
         raise ModelError(read_source(path), [NO_UNKNOWN])
     return theta

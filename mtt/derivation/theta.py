@@ -1,8 +1,12 @@
 """Stage 6: transfer function -> Theta, the paper's matrix of the system.
 
 theta = [a0..an, -b0..-bm] from the canonical denominator and numerator, and
-theta(k) = Theta K(k) with K(k) = [1, k, ..., k^N]: column j of Theta holds the
-coefficients of k^j. Theta and N are all the estimator needs to know of the system.
+theta(k) = Theta K(k): column j of Theta holds the coefficients of the monomial K_j(k).
+With one unknown k, K(k) = [1, k, ..., k^N] (every power up to the degree N, as in the
+paper). With several unknowns k1..kp, K(k) holds the monomials k1^i1 ... kp^ip that occur
+in the coefficients, by total degree, then with higher powers of the earlier unknowns
+first: [1, ra, jl, ra^2, ra*jl, ...]. Theta, the unknowns and the monomials are all an
+estimator needs to know of the system.
 """
 
 from __future__ import annotations
@@ -14,6 +18,8 @@ import sympy
 
 from mtt.derivation.transfer import TransferFunction
 
+Monomial = tuple[int, ...]  # exponents, one per unknown, in the order of `unknowns`
+
 
 @dataclass(frozen=True)
 class Theta:
@@ -24,17 +30,40 @@ class Theta:
     source_name: str  # the model file as named on the command line
     input: str  # "Se:v"
     output: str  # "Df:vm"
-    unknown: str | None  # the parameter identified
-    symbols: tuple[str, ...]  # parameters kept symbolic, in file order
+    unknowns: tuple[str, ...]  # the parameters identified, in order
+    symbols: tuple[str, ...]  # parameters kept symbolic, in model order
     defaults: Mapping[str, sympy.Expr | None]  # file values of the kept symbols (or None)
     assumed: Mapping[str, sympy.Expr]  # exact values substituted for the other parameters
-    true_value: sympy.Expr | None  # the file's value of the unknown (for simulations)
-    num: sympy.Expr  # canonical numerator, in s, the unknown and the symbols
+    true_values: Mapping[str, sympy.Expr | None]  # the file's values of the unknowns
+    num: sympy.Expr  # canonical numerator, in s, the unknowns and the symbols
     den: sympy.Expr  # canonical denominator
     n: int  # degree of den in s
     m: int  # degree of num in s
-    N: int  # degree of theta in the unknown
-    matrix: sympy.Matrix  # (n + 1 + m + 1) x (N + 1): rows a0..an, -b0..-bm
+    monomials: tuple[Monomial, ...]  # the column monomials K_j: exponents per unknown
+    matrix: sympy.Matrix  # (n + 1 + m + 1) x len(monomials): rows a0..an, -b0..-bm
+
+    @property
+    def unknown(self) -> str | None:
+        """The unknown, when there is exactly one."""
+        return self.unknowns[0] if len(self.unknowns) == 1 else None
+
+    @property
+    def true_value(self) -> sympy.Expr | None:
+        """The file's value of the unknown, when there is exactly one."""
+        return self.true_values.get(self.unknown) if self.unknown else None
+
+    @property
+    def N(self) -> int:
+        """The degree of theta in the unknowns (the total degree, with several)."""
+        return max(sum(monomial) for monomial in self.monomials)
+
+    @property
+    def degrees(self) -> dict[str, int]:
+        """Each unknown's highest power in theta."""
+        return {
+            name: max(monomial[i] for monomial in self.monomials)
+            for i, name in enumerate(self.unknowns)
+        }
 
     @property
     def row_labels(self) -> tuple[str, ...]:
@@ -42,44 +71,76 @@ class Theta:
             f"-b{i}" for i in range(self.m + 1)
         )
 
+    @property
+    def column_labels(self) -> tuple[str, ...]:
+        """Each column's monomial as text: `1`, `k`, `k^2`, `ra*jl`."""
+        return tuple(monomial_text(self.unknowns, monomial) for monomial in self.monomials)
+
+    def K(self, values: Mapping[str, sympy.Expr]) -> sympy.Matrix:
+        """K(k) at the given values of the unknowns: theta = Theta K(k)."""
+        return sympy.Matrix(
+            [
+                sympy.Mul(
+                    *(values[name] ** e for name, e in zip(self.unknowns, monomial, strict=True))
+                )
+                for monomial in self.monomials
+            ]
+        )
+
+
+def monomial_text(unknowns: tuple[str, ...], monomial: Monomial) -> str:
+    factors = [
+        name if power == 1 else f"{name}^{power}"
+        for name, power in zip(unknowns, monomial, strict=True)
+        if power
+    ]
+    return "*".join(factors) or "1"
+
+
+def _column_order(monomial: Monomial) -> tuple:
+    """By total degree, then higher powers of the earlier unknowns first."""
+    return (sum(monomial), tuple(-e for e in monomial))
+
 
 def theta_matrix(tf: TransferFunction) -> Theta:
-    """Theta from the canonical transfer function (one column, N = 0, without an unknown)."""
+    """Theta from the canonical transfer function (one column, 1, without an unknown)."""
     equations = tf.equations
     graph = equations.causal.bondgraph
     params = equations.parametrisation
+    p = len(params.unknowns)
     n, m = tf.degree("den"), tf.degree("num")
-    rows: list[dict[int, sympy.Expr]] = [{} for _ in range(n + m + 2)]
-    skip = 2 if params.unknown else 1  # s and the unknown come first
-    rest = tf.gens[skip:]
+    rows: list[dict[Monomial, sympy.Expr]] = [{} for _ in range(n + m + 2)]
+    rest = tf.gens[1 + p :]  # s and the unknowns come first
     for offset, poly, sign in ((0, tf.den, 1), (n + 1, tf.num, -1)):
         for monom, coefficient in poly.terms():
-            power_s, power_k = monom[0], monom[1] if params.unknown else 0
-            others = monom[skip:]
+            power_s, powers, others = monom[0], monom[1 : 1 + p], monom[1 + p :]
             term = (
                 sign
                 * sympy.Integer(int(coefficient))
                 * sympy.Mul(*(g**e for g, e in zip(rest, others, strict=True)))
             )
             row = rows[offset + power_s]
-            row[power_k] = row.get(power_k, sympy.Integer(0)) + term
-    N = max((j for row in rows for j in row), default=0)
-    matrix = sympy.Matrix([[row.get(j, sympy.Integer(0)) for j in range(N + 1)] for row in rows])
+            row[powers] = row.get(powers, sympy.Integer(0)) + term
+    occurring = {monomial for row in rows for monomial in row}
+    if p <= 1:  # every power up to the degree
+        occurring = {(j,) * p for j in range(max(sum(mono) for mono in occurring) + 1)}
+    monomials = tuple(sorted(occurring, key=_column_order))
+    matrix = sympy.Matrix([[row.get(j, sympy.Integer(0)) for j in monomials] for row in rows])
     return Theta(
         model=graph.name,
         description=graph.description,
         source_name=graph.source.name,
         input=graph.component(graph.input).label,
         output=graph.component(graph.output).label,
-        unknown=params.unknown,
+        unknowns=params.unknowns,
         symbols=params.symbols,
         defaults=params.defaults,
         assumed=params.assumed,
-        true_value=params.true_value,
+        true_values=params.true_values,
         num=tf.numerator,
         den=tf.denominator,
         n=n,
         m=m,
-        N=N,
+        monomials=monomials,
         matrix=matrix,
     )

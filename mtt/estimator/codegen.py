@@ -46,6 +46,13 @@ def _fail(theta: Theta, kind: str, message: str) -> ModelError:
 
 def _check(theta: Theta) -> None:
     """Reject what the generated module could not carry safely or use meaningfully."""
+    if len(theta.unknowns) > 1:
+        raise _fail(
+            theta,
+            "several_unknowns",
+            f"the estimator identifies one unknown, and the model has {len(theta.unknowns)} "
+            f"({', '.join(theta.unknowns)}): choose one with --unknown NAME",
+        )
     for role, name in (("model name", theta.model), ("unknown", theta.unknown)):
         if not (isinstance(name, str) and name.isidentifier() and not keyword.iskeyword(name)):
             raise _fail(theta, "bad_name", f"the {role} {name!r} is not a Python identifier")

@@ -18,13 +18,21 @@ from mtt.language.components import LIBRARY, ComponentType, PortRule, Role
 from mtt.language.diagnostics import (
     Diagnostic,
     ModelError,
+    Origin,
     Position,
     Severity,
     Source,
     error,
     warning,
 )
-from mtt.language.parse import RESERVED, ComponentUse, Expression, NameUse, ParsedModel
+from mtt.language.parse import (
+    RESERVED,
+    ComponentUse,
+    Expression,
+    NameUse,
+    ParsedModel,
+    PortDecl,
+)
 
 
 @dataclass(frozen=True)
@@ -66,6 +74,16 @@ class Port:
 
 
 @dataclass(frozen=True)
+class Selection:
+    """What the command line chooses over the file: the unknowns (in order), the input and
+    the output (TYPE:NAME)."""
+
+    unknowns: tuple[str, ...] | None = None  # None: the `unknown` declarations, in order
+    input: str | None = None
+    output: str | None = None
+
+
+@dataclass(frozen=True)
 class BondGraph:
     source: Source
     name: str
@@ -74,7 +92,7 @@ class BondGraph:
     parameters: MappingProxyType  # name -> Parameter, in file order
     input: str
     output: str
-    unknown: str | None
+    unknowns: tuple[str, ...]  # the parameters to identify, in order
     warnings: tuple[Diagnostic, ...]
 
     def component(self, name: str) -> Component:
@@ -113,15 +131,16 @@ def _implied_argument(use: ComponentUse) -> Expression:
 class _Checker:
     """Collects the problems of one model; each method checks one rule of the language."""
 
-    def __init__(self, parsed: ParsedModel, unknown: str | None):
+    def __init__(self, parsed: ParsedModel, selection: Selection):
         self.parsed = parsed
-        self.option_unknown = unknown
+        self.selection = selection
+        self.origin = Origin(parsed.source)
         self.problems: list[Diagnostic] = []
         self.components: dict[str, Component] = {}
         self.parameters: dict[str, Parameter] = {}
 
     def report(self, kind: str, message: str, position: Position | None = None) -> None:
-        self.problems.append(error(kind, message, position))
+        self.problems.append(error(kind, message, position, self.origin))
 
     def check_parameters(self) -> None:
         for decl in self.parsed.parameters:
@@ -250,27 +269,20 @@ class _Checker:
                     self.parameters[first].position,
                 )
 
-    def check_unknown(self) -> str | None:
-        if self.option_unknown is not None:
-            if self.option_unknown not in self.parameters:
+    def check_unknowns(self) -> tuple[str, ...]:
+        chosen = self.selection.unknowns
+        if chosen is None:
+            return tuple(p.name for p in self.parameters.values() if p.declared_unknown)
+        for name in chosen:
+            if name not in self.parameters:
                 self.report(
                     "undeclared_parameter",
-                    f"the unknown {self.option_unknown!r} "
-                    "chosen on the command line is not a parameter of the model",
+                    f"the unknown {name!r} chosen on the command line is not a parameter "
+                    "of the model",
                 )
-                return None
-            return self.option_unknown
-        unknowns = [p for p in self.parameters.values() if p.declared_unknown]
-        if len(unknowns) > 1:
-            names = ", ".join(p.name for p in unknowns)
-            self.report(
-                "several_unknowns",
-                f"several unknowns ({names}); version 1 identifies "
-                "one parameter: choose it with --unknown NAME",
-                unknowns[1].position,
-            )
-            return None
-        return unknowns[0].name if unknowns else None
+        for name in sorted({n for n in chosen if chosen.count(n) > 1}):
+            self.report("duplicate_name", f"the unknown {name!r} is chosen twice")
+        return tuple(dict.fromkeys(n for n in chosen if n in self.parameters))
 
     def check_bonds(self, graph: nx.MultiDiGraph) -> None:
         for bond in self.parsed.bonds:
@@ -313,60 +325,70 @@ class _Checker:
                         f"the bond of {component.label} points "
                         f"{way} it, which makes it an active element",
                         component.position,
+                        self.origin,
                     )
                 )
         return notes
 
     def choose_port(self, role: Role) -> str | None:
+        """The input (or output): the command line's choice, the file's statement, or the
+        only candidate."""
         kind, word = ("no_input", "input") if role is Role.SOURCE else ("no_output", "output")
         candidates = [c for c in self.components.values() if c.type.role is role]
         statements = [p for p in self.parsed.ports if p.role == word]
         for extra in statements[1:]:
             self.report("syntax", f"a second {word!r} statement", extra.position)
-        if statements:
-            chosen = statements[0]
-            component = self.components.get(chosen.name)
-            if component is None or component.type.name != chosen.type:
-                actual = f" (it is {component.label})" if component else ""
-                self.report(
-                    "undeclared_component",
-                    f"{chosen.type}:{chosen.name} does not exist{actual}",
-                    chosen.position,
-                )
-                return None
-            if component.type.role is not role:
-                self.report(kind, f"{component.label} is not a {role.value}", chosen.position)
-                return None
-            return chosen.name
-        if len(candidates) == 1:
+        override = getattr(self.selection, word)
+        if override is not None:
+            type_, _, name = override.partition(":")
+            chosen = PortDecl(word, type_, name, None)
+            how = f" (chosen with --{word})"
+        elif statements:
+            chosen, how = statements[0], ""
+        elif len(candidates) == 1:
             return candidates[0].name
-        what = "sources" if role is Role.SOURCE else "detectors"
-        if not candidates:
-            self.report(kind, f"the model has no {role.value} (an {word} is needed)")
         else:
-            names = ", ".join(c.label for c in candidates)
+            what = "sources" if role is Role.SOURCE else "detectors"
+            if not candidates:
+                self.report(kind, f"the model has no {role.value} (an {word} is needed)")
+            else:
+                names = ", ".join(c.label for c in candidates)
+                self.report(
+                    kind,
+                    f"several {what} ({names}): say which is the {word} with an "
+                    f"'{word} TYPE:NAME' statement or --{word} TYPE:NAME",
+                )
+            return None
+        component = self.components.get(chosen.name)
+        if component is None or component.type.name != chosen.type:
+            actual = f" (it is {component.label})" if component else ""
             self.report(
-                kind,
-                f"several {what} ({names}): say which is the {word} with an "
-                f"'{word} TYPE:NAME' statement",
+                "undeclared_component",
+                f"{chosen.type}:{chosen.name}{how} does not exist{actual}",
+                chosen.position,
             )
-        return None
+            return None
+        if component.type.role is not role:
+            self.report(kind, f"{component.label}{how} is not a {role.value}", chosen.position)
+            return None
+        return chosen.name
 
 
-def build(parsed: ParsedModel, unknown: str | None = None) -> BondGraph:
+def build(parsed: ParsedModel, selection: Selection | None = None) -> BondGraph:
     """Validate a parsed model and build its bond graph; raise `ModelError` listing every error.
 
-    `unknown` overrides the model's `unknown` declaration (the compiler's --unknown).
+    `selection` overrides the model's `unknown` declarations and its `input` and `output`
+    statements (the command line's --unknown, --input and --output).
     """
     if parsed.header is None or not parsed.bonds:
         what = "no statement" if parsed.header is None else "no bond"
         raise ModelError(parsed.source, [error("empty_model", f"the model has {what}")])
-    checker = _Checker(parsed, unknown)
+    checker = _Checker(parsed, selection or Selection())
     checker.check_parameters()
     checker.check_components()
     checker.check_names()
     checker.check_cycles()
-    chosen_unknown = checker.check_unknown()
+    unknowns = checker.check_unknowns()
 
     graph = nx.MultiDiGraph()
     for name, component in checker.components.items():
@@ -406,14 +428,14 @@ def build(parsed: ParsedModel, unknown: str | None = None) -> BondGraph:
         parameters=MappingProxyType(dict(checker.parameters)),
         input=input_name,
         output=output_name,
-        unknown=chosen_unknown,
+        unknowns=unknowns,
         warnings=tuple(notes),
     )
 
 
 def _order(diagnostic: Diagnostic):
     severity = 0 if diagnostic.severity is Severity.ERROR else 1
-    return (diagnostic.position or Position(0, 0), severity)
+    return (diagnostic.key, severity)
 
 
 def summary_counts(bondgraph: BondGraph) -> dict[str, int]:

@@ -3,41 +3,21 @@
 Every stage reports problems in the user's model as `Diagnostic` records; a stage
 that cannot go on raises `ModelError` carrying all of them, so the CLI can print
 every problem found in one pass and API users get the same records.
+
+A model may span several files (subsystems): every diagnostic knows the file its line
+and column belong to (its `Origin`), and, for a line in a subsystem's file, the chain of
+`subsystem` statements that brought the file in, printed as notes.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from enum import Enum
 
 
 class Severity(Enum):
     ERROR = "error"
     WARNING = "warning"
-
-
-@dataclass(frozen=True, order=True)
-class Position:
-    """A 1-based line and column in a source file."""
-
-    line: int
-    column: int
-
-
-@dataclass(frozen=True)
-class Diagnostic:
-    kind: str
-    message: str
-    position: Position | None = None
-    severity: Severity = Severity.ERROR
-
-    def to_json(self) -> dict:
-        return {
-            "kind": self.kind,
-            "line": self.position.line if self.position else None,
-            "column": self.position.column if self.position else None,
-            "message": self.message,
-        }
 
 
 @dataclass(frozen=True)
@@ -54,18 +34,100 @@ class Source:
         return lines[number - 1].removesuffix("\r") if 0 < number <= len(lines) else ""
 
     def render(self, diagnostic: Diagnostic) -> str:
-        """`FILE:LINE:COL: error[KIND]: message`, the source line and a caret."""
-        where = self.name
-        if diagnostic.position:
-            where += f":{diagnostic.position.line}:{diagnostic.position.column}"
-        head = f"{where}: {diagnostic.severity.value}[{diagnostic.kind}]: {diagnostic.message}"
-        if not diagnostic.position:
-            return head
-        number = str(diagnostic.position.line)
-        text = self.line(diagnostic.position.line).expandtabs(1)
-        pad = " " * len(number)
-        caret = " " * (diagnostic.position.column - 1) + "^"
-        return f"{head}\n {number} | {text}\n {pad} | {caret}"
+        """The diagnostic as the compiler prints it; this file unless it names its own."""
+        return diagnostic.render(self)
+
+
+@dataclass(frozen=True)
+class Inclusion:
+    """A `subsystem` statement that brought a file into the model."""
+
+    subsystem: str  # the subsystem's full (dotted) name
+    file: str  # the including file, as reported
+    line: int
+    column: int
+
+    @property
+    def note(self) -> str:
+        return f"in subsystem {self.subsystem} ({self.file}:{self.line})"
+
+
+@dataclass(frozen=True)
+class Origin:
+    """The file a line and column belong to, and how that file entered the model."""
+
+    source: Source
+    within: tuple[Inclusion, ...] = ()  # the innermost subsystem statement first
+
+
+def _outer(origin: Origin | None) -> tuple[tuple[int, int], ...]:
+    """The places of the subsystem statements around a file, the outermost first."""
+    return tuple((i.line, i.column) for i in reversed(origin.within)) if origin else ()
+
+
+@dataclass(frozen=True, order=True)
+class Position:
+    """A 1-based line and column in a source file; `origin` says which file, when the
+    model spans several (positions compare by line and column only)."""
+
+    line: int
+    column: int
+    origin: Origin | None = field(default=None, compare=False)
+
+    @property
+    def key(self) -> tuple:
+        """Model order: a line of a subsystem's file sorts at its subsystem statement."""
+        return (*_outer(self.origin), (self.line, self.column))
+
+
+@dataclass(frozen=True)
+class Diagnostic:
+    kind: str
+    message: str
+    position: Position | None = None
+    severity: Severity = Severity.ERROR
+    origin: Origin | None = None  # the file, when known (always, once in a ModelError)
+
+    @property
+    def file(self) -> str | None:
+        return self.origin.source.name if self.origin else None
+
+    @property
+    def notes(self) -> tuple[str, ...]:
+        return tuple(i.note for i in self.origin.within) if self.origin else ()
+
+    @property
+    def key(self) -> tuple:
+        """Model order, the diagnostics without a place first."""
+        if self.position is not None:
+            return self.position.key
+        return (*_outer(self.origin), (0, 0))
+
+    def to_json(self) -> dict:
+        return {
+            "file": self.file,
+            "kind": self.kind,
+            "line": self.position.line if self.position else None,
+            "column": self.position.column if self.position else None,
+            "message": self.message,
+            "notes": list(self.notes),
+        }
+
+    def render(self, default: Source | None = None) -> str:
+        """`FILE:LINE:COL: error[KIND]: message`, the source line, a caret, then the notes."""
+        source = self.origin.source if self.origin else default
+        where = source.name if source else "<model>"
+        if self.position:
+            where += f":{self.position.line}:{self.position.column}"
+        lines = [f"{where}: {self.severity.value}[{self.kind}]: {self.message}"]
+        if self.position and source:
+            number = str(self.position.line)
+            text = source.line(self.position.line).expandtabs(1)
+            pad = " " * len(number)
+            caret = " " * (self.position.column - 1) + "^"
+            lines += [f" {number} | {text}", f" {pad} | {caret}"]
+        lines += [f"note: {note}" for note in self.notes]
+        return "\n".join(lines)
 
 
 class MttError(Exception):
@@ -91,18 +153,22 @@ class MttError(Exception):
 class ModelError(MttError):
     """A model that cannot be processed; `diagnostics` holds every problem found.
 
-    As an `MttError` it reports its first error: `kind`, `file`, `line`, `column`.
+    Diagnostics that do not name their file are taken to be about `source`. As an
+    `MttError` it reports its first error: `kind`, `file`, `line`, `column`.
     """
 
     def __init__(self, source: Source, diagnostics: list[Diagnostic] | tuple[Diagnostic, ...]):
         self.source = source
-        self.diagnostics = tuple(diagnostics)
-        first = (self.errors or self.diagnostics or (Diagnostic("model", ""),))[0]
+        default = Origin(source)
+        self.diagnostics = tuple(
+            d if d.origin is not None else replace(d, origin=default) for d in diagnostics
+        )
+        first = (self.errors or self.diagnostics or (Diagnostic("model", "", origin=default),))[0]
         where = first.position
         super().__init__(
             self.render(),
             kind=first.kind,
-            file=source.name,
+            file=first.file,
             line=where.line if where else None,
             column=where.column if where else None,
         )
@@ -116,15 +182,25 @@ class ModelError(MttError):
         return tuple(d for d in self.diagnostics if d.severity is Severity.WARNING)
 
     def render(self) -> str:
-        return "\n".join(self.source.render(d) for d in self.diagnostics)
+        return "\n".join(d.render() for d in self.diagnostics)
 
     def kinds(self) -> list[str]:
         return [d.kind for d in self.errors]
 
 
-def error(kind: str, message: str, position: Position | None = None) -> Diagnostic:
-    return Diagnostic(kind, message, position, Severity.ERROR)
+def _diagnostic(kind, message, position, severity, origin) -> Diagnostic:
+    if origin is None and position is not None:
+        origin = position.origin
+    return Diagnostic(kind, message, position, severity, origin)
 
 
-def warning(kind: str, message: str, position: Position | None = None) -> Diagnostic:
-    return Diagnostic(kind, message, position, Severity.WARNING)
+def error(
+    kind: str, message: str, position: Position | None = None, origin: Origin | None = None
+) -> Diagnostic:
+    return _diagnostic(kind, message, position, Severity.ERROR, origin)
+
+
+def warning(
+    kind: str, message: str, position: Position | None = None, origin: Origin | None = None
+) -> Diagnostic:
+    return _diagnostic(kind, message, position, Severity.WARNING, origin)

@@ -421,7 +421,7 @@ def _first_position(statement) -> Position:
 
 
 def _order(diagnostic: Diagnostic):
-    return diagnostic.position or Position(0, 0)
+    return diagnostic.key
 
 
 def parse_expression(text: str, variables: frozenset[str] = frozenset({LAPLACE})) -> sympy.Expr:
