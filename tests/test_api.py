@@ -193,7 +193,7 @@ def test_model_errors_are_mtt_errors_located_at_the_first_error():
     ("options", "kind", "says"),
     [
         ({"unknowns": ["r", "c"]}, "unsupported", "several unknowns"),
-        ({"input": "Sf:x"}, "unsupported", "input='Sf:x'"),
+        ({"input": "Sf:x"}, "undeclared_component", "Sf:x"),
         ({"set": {"x": 1}}, "undeclared_parameter", "'x'"),
         ({"set": {"r": float("inf")}}, "bad_value", "finite"),
         ({"set": {"r": True}}, "bad_value", "expected a number"),

@@ -71,9 +71,9 @@ def load(
     with a line break). Raise `MttError` for anything wrong in it.
 
     unknowns: the parameter to identify, instead of the model's `unknown` (a name, or a
-        list of one name: several unknowns arrive with language version 2).
-    input, output: the source and the detector (TYPE:NAME), when they are the model's own
-        (choosing others arrives with language version 2).
+        list of one name: the API identifies one unknown for now).
+    input, output: the source and the detector (TYPE:NAME), over the model's `input` and
+        `output` statements.
     set: values replacing the file's, {name: number or exact expression text}.
     keep: parameters kept symbolic instead of substituted (names, or "a,b").
 
@@ -93,30 +93,23 @@ def load(
     >>> mtt.load(model.source.text, set={"r": 2000}).transfer_function.expr
     1/(2000*c*s + 1)
     """
-    graph_unknowns = _names("unknowns", unknowns)
-    if len(graph_unknowns) > 1:
-        raise MttError(
-            f"several unknowns ({', '.join(graph_unknowns)}) need language version 2, which "
-            "this mtt does not have yet: choose one",
-            kind="unsupported",
-        )
-    unknown = graph_unknowns[0] if graph_unknowns else None
-    source = _source(path_or_text)
-    graph = build(parse(source), unknown=unknown)
-    for option, wanted, own in (("input", input, graph.input), ("output", output, graph.output)):
-        label = graph.component(own).label
-        if wanted is not None and wanted != label:
-            raise MttError(
-                f"{option}={wanted!r}: this mtt derives from the model's own {option} "
-                f"({label}); choosing another arrives with language version 2",
-                kind="unsupported",
-            )
     overrides = {name: exact(name, value) for name, value in (set or {}).items()}
+    chosen = _names("unknowns", unknowns)
     choice = ParameterChoice(
-        unknown=unknown,
+        unknowns=chosen or None,
         keep=frozenset(_names("keep", keep)),
         overrides=MappingProxyType(overrides),
+        input=input,
+        output=output,
     )
+    source = _source(path_or_text)
+    graph = build(parse(source), choice.selection)
+    if len(graph.unknowns) > 1:
+        raise MttError(
+            f"several unknowns ({', '.join(graph.unknowns)}): the Python API identifies one "
+            "for now: choose it with unknowns=NAME",
+            kind="unsupported",
+        )
     parametrise(graph, choice)  # names in set= and keep= are checked now, not at first use
     return Model(graph, choice)
 
@@ -154,7 +147,7 @@ class Model:
 
     @property
     def unknowns(self) -> tuple[str, ...]:
-        return (self.bondgraph.unknown,) if self.bondgraph.unknown else ()
+        return self.bondgraph.unknowns
 
     @property
     def input(self) -> str:
