@@ -165,6 +165,16 @@ class Model:
             for name, p in self.bondgraph.parameters.items()
         }
 
+    def _repr_svg_(self) -> str:
+        """The bond graph, drawn (with causal strokes when causality can be assigned)."""
+        from mtt.cli import draw
+
+        try:
+            causal = self.causality.causal
+        except MttError:
+            causal = None
+        return draw.render(draw.figure(self.bondgraph, causal), "svg").decode("utf-8")
+
     @cached_property
     def causality(self) -> Causality:
         return Causality(assign(self.bondgraph))

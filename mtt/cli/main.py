@@ -15,14 +15,14 @@ import traceback
 from typing import TYPE_CHECKING
 
 from mtt import __version__
-from mtt.cli import experiment_args
+from mtt.cli import experiment_args, views
 from mtt.cli.options import (
     add_parameter_options,
     add_selection_options,
     choice_from_args,
     selection_from_args,
 )
-from mtt.language.diagnostics import ModelError
+from mtt.language.diagnostics import ModelError, MttError
 
 if TYPE_CHECKING:
     from mtt.derivation.equations import Equations
@@ -289,6 +289,7 @@ def make_parser() -> argparse.ArgumentParser:
         command.set_defaults(run=run)
 
     experiment_args.register(commands)
+    views.register(commands)
     return parser
 
 
@@ -296,7 +297,7 @@ def main(argv: list[str] | None = None) -> int:
     args = make_parser().parse_args(argv)
     try:
         return args.run(args)
-    except ModelError as exc:
+    except MttError as exc:  # a ModelError renders every problem in the model
         print(exc.render(), file=sys.stderr)
         return EXIT_MODEL_ERROR
     except KeyboardInterrupt:

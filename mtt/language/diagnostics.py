@@ -149,6 +149,12 @@ class MttError(Exception):
         super().__init__(message)
         self.kind, self.file, self.line, self.column = kind, file, line, column
 
+    def render(self) -> str:
+        """`FILE:LINE:COL: error[KIND]: message`, as much of the place as is known."""
+        place = (self.file, self.line, self.column)
+        where = ":".join(str(part) for part in place if part is not None)
+        return f"{where + ': ' if where else ''}error[{self.kind}]: {self}"
+
 
 class ModelError(MttError):
     """A model that cannot be processed; `diagnostics` holds every problem found.

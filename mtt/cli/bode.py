@@ -1,0 +1,65 @@
+"""Bode diagrams of a model for several values of its unknown (scipy.signal, matplotlib).
+
+One frequency grid serves every value, wide enough for the poles and zeros of each
+(scipy.signal.findfreqs), so that the curves compare point by point.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+from matplotlib.backends.backend_agg import FigureCanvasAgg
+from matplotlib.figure import Figure
+from scipy import signal
+
+POINTS = 400
+
+
+@dataclass(frozen=True)
+class Bode:
+    """Magnitude and phase of G(jw) on one frequency grid, one row per value of k."""
+
+    values: tuple[float, ...]  # the unknown's values
+    frequency: np.ndarray  # rad/s
+    magnitude_db: np.ndarray  # (len(values), len(frequency))
+    phase_deg: np.ndarray
+
+
+def _trimmed(coefficients: np.ndarray) -> np.ndarray:
+    """Without leading zeros (a value of k can lower a degree), never empty."""
+    return np.trim_zeros(coefficients, "f") if coefficients.any() else np.zeros(1)
+
+
+def bode(systems: Sequence[tuple[float, np.ndarray, np.ndarray]]) -> Bode:
+    """The Bode data of (k, num, den) for each value of k (num, den highest power first)."""
+    systems = [(k, _trimmed(num), _trimmed(den)) for k, num, den in systems]
+    grids = [signal.findfreqs(num, den, POINTS) for _, num, den in systems]
+    low = min(float(grid[0]) for grid in grids)
+    high = max(float(grid[-1]) for grid in grids)
+    w = np.logspace(np.log10(low), np.log10(high), POINTS)
+    magnitude, phase = [], []
+    for _, num, den in systems:
+        _, mag, ph = signal.bode((num, den), w)
+        magnitude.append(mag)
+        phase.append(ph)
+    return Bode(tuple(k for k, _, _ in systems), w, np.array(magnitude), np.array(phase))
+
+
+def figure(data: Bode, *, unknown: str, title: str) -> Figure:
+    fig = Figure(figsize=(7.0, 5.6), layout="constrained")
+    FigureCanvasAgg(fig)
+    magnitude, phase = fig.subplots(2, 1, sharex=True)
+    for k, mag, ph in zip(data.values, data.magnitude_db, data.phase_deg, strict=True):
+        label = f"{unknown} = {k:g}"
+        magnitude.semilogx(data.frequency, mag, label=label)
+        phase.semilogx(data.frequency, ph, label=label)
+    magnitude.set_ylabel("magnitude [dB]")
+    phase.set_ylabel("phase [deg]")
+    phase.set_xlabel("angular frequency [rad/s]")
+    for ax in (magnitude, phase):
+        ax.grid(True, which="both", alpha=0.3)
+    magnitude.legend(loc="best")
+    magnitude.set_title(title, fontsize=10)
+    return fig

@@ -1,0 +1,134 @@
+"""`mtt draw`, `mtt bode` and `mtt examples`: a model as pictures, and the shipped models.
+
+The argparse wiring is light; each command imports what it draws with when it runs.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from pathlib import Path
+
+from mtt.cli.options import add_parameter_options, choice_from_args
+from mtt.language.diagnostics import ModelError, MttError
+
+EXIT_OK = 0
+FORMATS = ("svg", "png", "pdf")
+
+
+def _figure_path(text: str) -> str:
+    """-o FILE.svg|png|pdf, checked before any work is done."""
+    suffix = Path(text).suffix.lstrip(".").lower()
+    if not text or suffix not in FORMATS:
+        raise argparse.ArgumentTypeError(f"{text!r}: the file must end in .svg, .png or .pdf")
+    return text
+
+
+def _values(text: str) -> list[float]:
+    """--k 1,5,10"""
+    try:
+        values = [float(part) for part in text.split(",") if part.strip()]
+    except ValueError:
+        raise argparse.ArgumentTypeError(
+            f"expected numbers separated by commas, not {text!r}"
+        ) from None
+    if not values or not all(abs(v) < float("inf") for v in values):
+        raise argparse.ArgumentTypeError(f"expected finite numbers, not {text!r}")
+    return values
+
+
+def _print_json(record: dict) -> None:
+    print(json.dumps(record))
+
+
+def cmd_draw(args) -> int:
+    from mtt.cli import draw
+    from mtt.derivation.causality import assign
+    from mtt.derivation.pipeline import load
+
+    graph = load(args.file, unknown=args.unknown)
+    causal, problem = None, None
+    try:
+        causal = assign(graph)
+    except ModelError as exc:  # still worth a picture: without strokes, and say why
+        problem = exc
+        print(exc.render(), file=sys.stderr)
+        print(f"mtt draw: warning: drawn without causal strokes ({exc.kind})", file=sys.stderr)
+    draw.save(draw.figure(graph, causal), args.output)
+    if args.json:
+        _print_json(
+            {"ok": True, "file": args.file, "output": args.output, "model": graph.name,
+             "causality": causal is not None,
+             "warnings": [d.to_json() for d in problem.errors] if problem else []}
+        )  # fmt: skip
+    else:
+        print(f"wrote {args.output}: bond graph of {graph.name}")
+    return EXIT_OK
+
+
+def cmd_bode(args) -> int:
+    from mtt.api.model import Model
+    from mtt.cli import bode, draw
+    from mtt.derivation.pipeline import load
+
+    model = Model(load(args.file, unknown=args.unknown), choice_from_args(args))
+    if not (args.output or args.json):
+        raise MttError("mtt bode: say where the diagram goes: -o FILE or --json", kind="usage")
+    unknown = model.unknowns[0] if model.unknowns else None
+    if unknown is None and args.k:
+        raise MttError(f"{model.name} has no unknown: --k does not apply", kind="no_unknown")
+    values = args.k or [model.parameters[unknown] if unknown else None]
+    if unknown and values == [None]:
+        raise MttError(f"{model.name} gives no value of {unknown}: pass --k", kind="missing_value")
+    systems = []
+    for k in values:
+        num, den = model.transfer_function.at(**({unknown: k} if unknown else {}))
+        systems.append((float(k) if unknown else float("nan"), num, den))
+    data = bode.bode(systems)
+    if args.output:
+        title = f"{model.name}: Bode diagram from {model.input} to {model.output}"
+        draw.save(bode.figure(data, unknown=unknown or "k", title=title), args.output)
+    if args.json:
+        _print_json(
+            {"ok": True, "file": args.file, "output": args.output, "model": model.name,
+             "unknown": unknown, "k": list(data.values),
+             "frequency": data.frequency.tolist(), "magnitude_db": data.magnitude_db.tolist(),
+             "phase_deg": data.phase_deg.tolist()}
+        )  # fmt: skip
+    elif args.output:
+        print(f"wrote {args.output}: Bode diagram of {model.name} for {len(values)} value(s)")
+    return EXIT_OK
+
+
+def register(commands) -> None:
+    """Add draw, bode and examples to the `mtt` subcommands."""
+    draw = commands.add_parser(
+        "draw",
+        help="draw the bond graph (SVG, PNG or PDF)",
+        description="Draw the model's bond graph: component labels, bonds numbered as in "
+        "`mtt show` with a half-arrow at the head (the direction of positive power), and the "
+        "causal stroke at the end of each bond that receives the effort.",
+    )
+    draw.add_argument("file", metavar="FILE")
+    draw.add_argument("-o", "--output", required=True, type=_figure_path,
+                      metavar="FILE.svg|png|pdf", help="the picture to write")  # fmt: skip
+    draw.add_argument("--unknown", metavar="NAME", help="the parameter to identify")
+    draw.add_argument("--json", action="store_true", help="print one JSON object")
+    draw.set_defaults(run=cmd_draw)
+
+    bode = commands.add_parser(
+        "bode",
+        help="Bode diagram for several values of the unknown",
+        description="Magnitude and phase of the transfer function against frequency, one "
+        "curve per value of the unknown.",
+    )
+    bode.add_argument("file", metavar="FILE")
+    bode.add_argument("--k", type=_values, metavar="V1,V2,...",
+                      help="values of the unknown (default: the model file's)")  # fmt: skip
+    bode.add_argument("-o", "--output", type=_figure_path, metavar="FILE.svg|png|pdf",
+                      help="the figure to write")  # fmt: skip
+    add_parameter_options(bode)
+    bode.add_argument("--json", action="store_true",
+                      help="print the frequencies, magnitudes and phases as JSON")  # fmt: skip
+    bode.set_defaults(run=cmd_bode)

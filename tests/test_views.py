@@ -1,0 +1,146 @@
+"""`mtt draw` and `mtt bode`: what the pictures hold, checked as data and as files."""
+
+from __future__ import annotations
+
+import json
+import re
+
+import numpy as np
+import pytest
+import sympy
+
+import mtt
+from mtt.cli import bode, draw
+from mtt.cli.main import main
+from mtt.derivation.causality import assign
+from mtt.derivation.pipeline import load
+
+CONFLICT = "model two\ninput Se:a\nparam r = 1\nSe:a -> 0:n\nSe:b -> 0:n\n0:n -> R:r\n0:n -> De:v\n"
+
+
+def run(capsys, *argv: str) -> tuple[int, str, str]:
+    status = main(list(argv))
+    out, err = capsys.readouterr()
+    return status, out, err
+
+
+def test_a_bond_runs_between_labels_with_its_barb_at_the_head_and_stroke_where_effort_goes():
+    a, b, half = np.array([0.0, 0.0]), np.array([2.0, 0.0]), np.array([0.3, 0.1])
+    picture = draw.bond_picture(7, a, b, half, half, stroke_at_head=False)
+    start, end = picture.line
+    np.testing.assert_allclose([start, end], [[0.3, 0.0], [1.7, 0.0]])  # at the label boxes
+    barb_from, barb_to = picture.barb
+    np.testing.assert_allclose(barb_from, end)
+    assert barb_to[0] < end[0] and barb_to[1] > 0  # back along the bond, on its left
+    stroke = np.array(picture.stroke)
+    np.testing.assert_allclose(stroke.mean(axis=0), start)  # across the tail's end
+    assert stroke[0, 0] == stroke[1, 0]  # perpendicular to the bond
+    assert draw.bond_picture(7, a, b, half, half, stroke_at_head=None).stroke is None
+
+
+def test_the_layout_is_deterministic_and_keeps_labels_apart():
+    graph = load(mtt.example("absorber"))
+    first, second = draw.layout(graph), draw.layout(graph)
+    assert all(np.array_equal(first[name], second[name]) for name in first)
+    points = np.array(list(first.values()))
+    distances = np.linalg.norm(points[:, None] - points[None], axis=-1)
+    np.fill_diagonal(distances, np.inf)
+    assert distances.min() > 0.5 * draw.BOND_LENGTH
+    extent = np.ptp(points, axis=0)
+    assert extent[0] >= extent[1]  # laid out wide
+
+
+def test_mtt_draw_writes_every_label_and_bond_number(tmp_path, capsys):
+    out = tmp_path / "rlc.svg"
+    status, stdout, _ = run(capsys, "draw", str(mtt.example("rlc")), "-o", str(out))
+    assert status == 0 and f"wrote {out}" in stdout
+    svg = out.read_text()
+    texts = set(re.findall(r">([^<>\n]+)</text>", svg))
+    assert {"Se:v", "1:loop", "R:r", "I:l", "C:c", "Df:i"} <= texts
+    assert {"1", "2", "3", "4", "5"} <= texts
+    run(capsys, "draw", str(mtt.example("rlc")), "-o", str(tmp_path / "again.svg"))
+    assert (tmp_path / "again.svg").read_bytes() == out.read_bytes()  # reproducible
+
+
+@pytest.mark.parametrize("suffix", ["png", "pdf"])
+def test_mtt_draw_other_formats(tmp_path, capsys, suffix):
+    out = tmp_path / f"drive.{suffix}"
+    status, stdout, _ = run(capsys, "draw", str(mtt.example("dc_drive")), "-o", str(out), "--json")
+    record = json.loads(stdout)
+    assert status == 0 and record["ok"] and record["causality"]
+    magic = {"png": b"\x89PNG", "pdf": b"%PDF"}[suffix]
+    assert out.read_bytes().startswith(magic)
+
+
+def test_a_causal_conflict_is_drawn_without_strokes_and_said(tmp_path, capsys):
+    model = tmp_path / "two.bg"
+    model.write_text(CONFLICT)
+    status, stdout, err = run(capsys, "draw", str(model), "-o", str(tmp_path / "two.png"))
+    assert status == 0 and (tmp_path / "two.png").exists()
+    assert "error[causal_conflict]" in err and "drawn without causal strokes" in err
+
+
+def test_draw_refuses_an_unknown_format(tmp_path, capsys):
+    with pytest.raises(SystemExit) as exit:
+        main(["draw", str(mtt.example("rlc")), "-o", str(tmp_path / "x.jpg")])
+    assert exit.value.code == 2
+    assert "must end in .svg, .png or .pdf" in capsys.readouterr().err
+
+
+def test_model_repr_svg_is_the_drawing():
+    svg = mtt.load(mtt.example("rlc"))._repr_svg_()
+    assert svg.lstrip().startswith("<?xml") and ">1:loop</text>" in svg
+
+
+def test_bode_data_are_the_exact_frequency_response(tmp_path):
+    model = mtt.load(mtt.example("dc_drive"))
+    values = [1.0, 10.0]
+    data = bode.bode([(k, *model.transfer_function.at(k=k)) for k in values])
+    s, k = sympy.symbols("s k")
+    for row, value in enumerate(values):
+        G = sympy.lambdify(s, model.transfer_function.expr.subs(k, value))
+        response = G(1j * data.frequency)
+        expected = 20 * np.log10(abs(response))
+        np.testing.assert_allclose(data.magnitude_db[row], expected, atol=1e-9)
+        # the zeros k s^2 + 1 put a notch at 1/sqrt(k) rad/s (below the roll-off)
+        low = data.frequency < 3
+        notch = data.frequency[low][np.argmin(data.magnitude_db[row][low])]
+        assert notch == pytest.approx(1 / np.sqrt(value), rel=0.03)
+    assert data.frequency[0] < 0.1 and data.frequency[-1] > 10  # both notches, the roll-off
+
+
+def test_mtt_bode_figure_and_json(tmp_path, capsys):
+    out = tmp_path / "bode.png"
+    status, stdout, _ = run(
+        capsys, "bode", str(mtt.example("absorber")), "--k", "0.25,0.72", "-o", str(out), "--json"
+    )
+    record = json.loads(stdout)
+    assert status == 0 and record["ok"] and record["k"] == [0.25, 0.72]
+    assert np.shape(record["magnitude_db"]) == (2, len(record["frequency"]))
+    assert out.read_bytes().startswith(b"\x89PNG")
+    # G(0) = k^3 / (l (k^3 + k^2 + k + 1)) with l = 1/2
+    gains = [20 * np.log10(k**3 / (0.5 * (k**3 + k**2 + k + 1))) for k in (0.25, 0.72)]
+    assert [row[0] for row in record["magnitude_db"]] == pytest.approx(gains, abs=0.01)
+
+
+@pytest.mark.parametrize(
+    ("argv", "says"),
+    [
+        (["--k", "1"], "say where the diagram goes"),
+        (["--k", "x", "--json"], "expected numbers separated by commas"),
+        (["--k", "1,nan", "--json"], "expected finite numbers"),
+    ],
+)
+def test_mtt_bode_usage_errors(capsys, argv, says):
+    try:
+        status = main(["bode", str(mtt.example("dc_drive")), *argv])
+    except SystemExit as exit:
+        status = exit.code
+    assert status == 2 and says in capsys.readouterr().err
+
+
+def test_the_figure_has_a_line_a_barb_and_a_stroke_per_bond():
+    graph = load(mtt.example("dc_drive"))
+    (with_strokes,) = draw.figure(graph, assign(graph)).axes
+    (without,) = draw.figure(graph).axes
+    assert (len(with_strokes.lines), len(without.lines)) == (3 * 11, 2 * 11)
