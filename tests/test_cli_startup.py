@@ -37,7 +37,14 @@ def _imported(*argv: str) -> set[str]:
 
 @pytest.mark.parametrize(
     "argv",
-    [("--help",), ("--version",), ("compile", "--help"), ("estimate", "--help"), ("tf", "--help"), ("draw", "--help")],
+    [
+        ("--help",),
+        ("--version",),
+        ("compile", "--help"),
+        ("estimate", "--help"),
+        ("tf", "--help"),
+        ("draw", "--help"),
+    ],
 )
 def test_the_parser_imports_no_heavy_library(argv):
     assert _imported(*argv) == set()

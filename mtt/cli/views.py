@@ -10,7 +10,12 @@ import json
 import sys
 from pathlib import Path
 
-from mtt.cli.options import add_parameter_options, choice_from_args
+from mtt.cli.options import (
+    add_parameter_options,
+    add_selection_options,
+    choice_from_args,
+    selection_from_args,
+)
 from mtt.language.diagnostics import ModelError, MttError
 
 EXIT_OK = 0
@@ -47,7 +52,7 @@ def cmd_draw(args) -> int:
     from mtt.derivation.causality import assign
     from mtt.derivation.pipeline import load
 
-    graph = load(args.file, unknown=args.unknown)
+    graph = load(args.file, selection_from_args(args))
     causal, problem = None, None
     try:
         causal = assign(graph)
@@ -55,15 +60,15 @@ def cmd_draw(args) -> int:
         problem = exc
         print(exc.render(), file=sys.stderr)
         print(f"mtt draw: warning: drawn without causal strokes ({exc.kind})", file=sys.stderr)
-    draw.save(draw.figure(graph, causal), args.output)
+    draw.save(draw.figure(graph, causal), args.out)
     if args.json:
         _print_json(
-            {"ok": True, "file": args.file, "output": args.output, "model": graph.name,
+            {"ok": True, "file": args.file, "out": args.out, "model": graph.name,
              "causality": causal is not None,
              "warnings": [d.to_json() for d in problem.errors] if problem else []}
         )  # fmt: skip
     else:
-        print(f"wrote {args.output}: bond graph of {graph.name}")
+        print(f"wrote {args.out}: bond graph of {graph.name}")
     return EXIT_OK
 
 
@@ -72,9 +77,16 @@ def cmd_bode(args) -> int:
     from mtt.cli import bode, draw
     from mtt.derivation.pipeline import load
 
-    model = Model(load(args.file, unknown=args.unknown), choice_from_args(args))
-    if not (args.output or args.json):
+    choice = choice_from_args(args)
+    model = Model(load(args.file, choice.selection), choice)
+    if not (args.out or args.json):
         raise MttError("mtt bode: say where the diagram goes: -o FILE or --json", kind="usage")
+    if len(model.unknowns) > 1:
+        raise MttError(
+            f"mtt bode draws one unknown, not {', '.join(model.unknowns)}: choose it with "
+            "--unknown NAME",
+            kind="unsupported",
+        )
     unknown = model.unknowns[0] if model.unknowns else None
     if unknown is None and args.k:
         raise MttError(f"{model.name} has no unknown: --k does not apply", kind="no_unknown")
@@ -86,18 +98,18 @@ def cmd_bode(args) -> int:
         num, den = model.transfer_function.at(**({unknown: k} if unknown else {}))
         systems.append((float(k) if unknown else float("nan"), num, den))
     data = bode.bode(systems)
-    if args.output:
+    if args.out:
         title = f"{model.name}: Bode diagram from {model.input} to {model.output}"
-        draw.save(bode.figure(data, unknown=unknown or "k", title=title), args.output)
+        draw.save(bode.figure(data, unknown=unknown or "k", title=title), args.out)
     if args.json:
         _print_json(
-            {"ok": True, "file": args.file, "output": args.output, "model": model.name,
+            {"ok": True, "file": args.file, "out": args.out, "model": model.name,
              "unknown": unknown, "k": list(data.values),
              "frequency": data.frequency.tolist(), "magnitude_db": data.magnitude_db.tolist(),
              "phase_deg": data.phase_deg.tolist()}
         )  # fmt: skip
-    elif args.output:
-        print(f"wrote {args.output}: Bode diagram of {model.name} for {len(values)} value(s)")
+    elif args.out:
+        print(f"wrote {args.out}: Bode diagram of {model.name} for {len(values)} value(s)")
     return EXIT_OK
 
 
@@ -111,9 +123,9 @@ def register(commands) -> None:
         "causal stroke at the end of each bond that receives the effort.",
     )
     draw.add_argument("file", metavar="FILE")
-    draw.add_argument("-o", "--output", required=True, type=_figure_path,
+    draw.add_argument("-o", "--out", required=True, type=_figure_path,
                       metavar="FILE.svg|png|pdf", help="the picture to write")  # fmt: skip
-    draw.add_argument("--unknown", metavar="NAME", help="the parameter to identify")
+    add_selection_options(draw)
     draw.add_argument("--json", action="store_true", help="print one JSON object")
     draw.set_defaults(run=cmd_draw)
 
@@ -126,7 +138,7 @@ def register(commands) -> None:
     bode.add_argument("file", metavar="FILE")
     bode.add_argument("--k", type=_values, metavar="V1,V2,...",
                       help="values of the unknown (default: the model file's)")  # fmt: skip
-    bode.add_argument("-o", "--output", type=_figure_path, metavar="FILE.svg|png|pdf",
+    bode.add_argument("-o", "--out", type=_figure_path, metavar="FILE.svg|png|pdf",
                       help="the figure to write")  # fmt: skip
     add_parameter_options(bode)
     bode.add_argument("--json", action="store_true",
