@@ -62,6 +62,22 @@ def test_set_keep_and_unknowns_choose_the_parameters():
     assert mtt.load(RC, input="Se:v", output="De:vc").output == "De:vc"
 
 
+def test_several_unknowns_in_the_transfer_function_and_theta_not_in_the_estimator():
+    motor = mtt.load(mtt.example("dc_motor"))
+    ra, jl = sympy.symbols("ra jl")
+    # G = km / ((la s + ra)(J s + b) + km^2), J = jm + jl, with la = 1/10, km = jm = 1, b = 1/10
+    G = 1 / ((s / 10 + ra) * ((1 + jl) * s + sympy.Rational(1, 10)) + 1)
+    assert sympy.cancel(motor.transfer_function.expr - G) == 0
+    assert motor.theta.monomials == (1, ra, jl, jl * ra)
+    den = motor.transfer_function.at(ra=2, jl=3)[1]
+    # (s/10 + 2)(4 s + 1/10) + 1 = 0.4 s^2 + 8.01 s + 1.2
+    np.testing.assert_allclose(den / den[0], [1, 8.01 / 0.4, 1.2 / 0.4])
+    rc = mtt.load(RC, unknowns="r,c")
+    assert rc.unknowns == ("r", "c") and rc.theta.monomials == (1, c * r)
+    assert kind_of(motor.estimator).kind == "several_unknowns"
+    assert kind_of(motor.to_scipy, 1).kind == "bad_argument"
+
+
 def test_the_paper_dc_drive_transfer_function_and_theta(dc_drive):
     paper = 10 * (k * s**2 + 1) / ((s**3 + 10 * s**2 + 11 * s + 10) * k * s + s**2 + 10 * s + 10)
     assert sympy.cancel(dc_drive.transfer_function.expr - paper) == 0
@@ -192,7 +208,6 @@ def test_model_errors_are_mtt_errors_located_at_the_first_error():
 @pytest.mark.parametrize(
     ("options", "kind", "says"),
     [
-        ({"unknowns": ["r", "c"]}, "unsupported", "several unknowns"),
         ({"input": "Sf:x"}, "undeclared_component", "Sf:x"),
         ({"set": {"x": 1}}, "undeclared_parameter", "'x'"),
         ({"set": {"r": float("inf")}}, "bad_value", "finite"),

@@ -70,8 +70,9 @@ def load(
     """Read and check a model: a file name (str or Path), or the model's text itself (a str
     with a line break). Raise `MttError` for anything wrong in it.
 
-    unknowns: the parameter to identify, instead of the model's `unknown` (a name, or a
-        list of one name: the API identifies one unknown for now).
+    unknowns: the parameters to identify, instead of those the model declares `unknown`
+        (names, or "a,b"); the transfer function and Theta take several, the generated
+        estimator one.
     input, output: the source and the detector (TYPE:NAME), over the model's `input` and
         `output` statements.
     set: values replacing the file's, {name: number or exact expression text}.
@@ -104,12 +105,6 @@ def load(
     )
     source = _source(path_or_text)
     graph = build(parse(source), choice.selection)
-    if len(graph.unknowns) > 1:
-        raise MttError(
-            f"several unknowns ({', '.join(graph.unknowns)}): the Python API identifies one "
-            "for now: choose it with unknowns=NAME",
-            kind="unsupported",
-        )
     parametrise(graph, choice)  # names in set= and keep= are checked now, not at first use
     return Model(graph, choice)
 
@@ -200,7 +195,7 @@ class Model:
         return Theta(self._checked_theta())
 
     def _checked_theta(self) -> derived.Theta:
-        if self._theta.unknown is None:
+        if not self._theta.unknowns:
             raise MttError(
                 f"{self.name} declares no unknown parameter: declare one with 'unknown NAME' "
                 "or load it with unknowns='NAME'",
@@ -210,7 +205,8 @@ class Model:
         return self._theta
 
     def to_scipy(self, k: object = None, **known: object):
-        """scipy.signal.TransferFunction at unknown = k (default: the file's value).
+        """scipy.signal.TransferFunction at unknown = k (default: the file's value); the
+        values of other names (several unknowns, kept parameters) by keyword.
 
         >>> import mtt
         >>> G = mtt.load(mtt.example("dc_drive")).to_scipy(10)
@@ -235,8 +231,11 @@ class Model:
     def _coefficients(self, k: object, known: dict):
         values = dict(known)
         if k is not None:
-            if not self.unknowns:
-                raise MttError(f"{self.name} has no unknown to give k to", kind="no_unknown")
+            if len(self.unknowns) != 1:
+                raise MttError(
+                    f"{self.name} has {len(self.unknowns)} unknowns: give each by name",
+                    kind="bad_argument",
+                )
             values[self.unknowns[0]] = k
         return self.transfer_function.at(**values)
 

@@ -58,7 +58,7 @@ def _numeric(expr: sympy.Expr, what: str) -> float:
 
 @dataclass(frozen=True)
 class _Values:
-    """Values for the free names of a result: the unknown and the known parameters kept
+    """Values for the free names of a result: the unknowns and the known parameters kept
     symbolic. A name not given takes the model file's value; a substituted parameter
     cannot be given (it is no longer in the result)."""
 
@@ -66,7 +66,7 @@ class _Values:
 
     @property
     def free(self) -> tuple[str, ...]:
-        return ((self.theta.unknown,) if self.theta.unknown else ()) + self.theta.symbols
+        return self.theta.unknowns + self.theta.symbols
 
     def substitution(self, given: Mapping[str, object]) -> dict[sympy.Symbol, sympy.Expr]:
         theta = self.theta
@@ -83,9 +83,7 @@ class _Values:
                     f"(free: {', '.join(self.free) or 'none'})",
                     kind="undeclared_parameter",
                 )
-        defaults = dict(theta.defaults)
-        if theta.unknown:
-            defaults[theta.unknown] = theta.true_value
+        defaults = {**theta.defaults, **theta.true_values}
         values = {}
         for name in self.free:
             value = exact(name, given[name]) if name in given else defaults[name]
@@ -101,7 +99,7 @@ class _Values:
 @dataclass(frozen=True)
 class TransferFunction:
     """G(s) = num / den, exact: numerator and denominator are sympy polynomials in `s`, the
-    unknown and any parameter kept symbolic, coprime, with integer coefficients.
+    unknowns and any parameter kept symbolic, coprime, with integer coefficients.
 
     >>> import mtt
     >>> tf = mtt.load(mtt.example("dc_drive")).transfer_function
@@ -131,7 +129,7 @@ class TransferFunction:
 
     @property
     def unknowns(self) -> tuple[str, ...]:
-        return (self.theta.unknown,) if self.theta.unknown else ()
+        return self.theta.unknowns
 
     @property
     def symbols(self) -> tuple[str, ...]:
@@ -174,7 +172,8 @@ class TransferFunction:
 @dataclass(frozen=True)
 class Theta:
     """The paper's matrix: theta(k) = [a0..an, -b0..-bm] = matrix * K, with K the column of
-    `monomials` of the unknown (1, k, k^2, ...): what the estimator is built from.
+    `monomials` of the unknowns (1, k, k^2, ... for one unknown k): what the estimator is
+    built from.
 
     >>> import mtt
     >>> theta = mtt.load(mtt.example("dc_drive")).theta
@@ -195,8 +194,11 @@ class Theta:
     @property
     def monomials(self) -> tuple[sympy.Expr, ...]:
         """Column j of `matrix` multiplies monomials[j]."""
-        k = sympy.Symbol(self.theta.unknown) if self.theta.unknown else sympy.Integer(1)
-        return tuple(k**j for j in range(self.theta.N + 1))
+        unknowns = [sympy.Symbol(name) for name in self.theta.unknowns]
+        return tuple(
+            sympy.Mul(*(k**e for k, e in zip(unknowns, exponents, strict=True)))
+            for exponents in self.theta.monomials
+        )
 
     @property
     def rows(self) -> tuple[str, ...]:
@@ -205,24 +207,24 @@ class Theta:
 
     @property
     def unknowns(self) -> tuple[str, ...]:
-        return (self.theta.unknown,) if self.theta.unknown else ()
+        return self.theta.unknowns
 
     @property
     def N(self) -> int:
-        """The degree of theta in the unknown."""
+        """The degree of theta in the unknowns (the total degree, with several)."""
         return self.theta.N
 
     def at(self, **known: object) -> np.ndarray:
-        """The matrix as floats, for values of the parameters kept symbolic (the unknown
-        stays a column index: it is what the estimator finds)."""
+        """The matrix as floats, for values of the parameters kept symbolic (the unknowns
+        are in the monomials, not in the matrix: they are what the estimator finds)."""
         given = dict(known)
-        if self.theta.unknown in given:
-            raise MttError(
-                f"{self.theta.unknown} is the unknown: Theta does not depend on its value",
-                kind="bad_value",
-            )
-        if self.theta.unknown:  # a placeholder value, never used: no entry depends on it
-            given[self.theta.unknown] = 0
+        for name in self.theta.unknowns:
+            if name in given:
+                raise MttError(
+                    f"{name} is an unknown: Theta does not depend on its value",
+                    kind="bad_value",
+                )
+            given[name] = 0  # a placeholder, never used: no entry depends on it
         substitution = _Values(self.theta).substitution(given)
         return np.array(
             [[_numeric(e.xreplace(substitution), "an entry of Theta") for e in row]
