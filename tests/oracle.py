@@ -10,6 +10,8 @@ parameters: G(s) is the output's entry of the solution. A rank-deficient M means
 model is singular (no unique solution).
 
     Se   e = u (input) or e = 0          Sf  f = u (input) or f = 0
+    MSe  e = its argument, with e(X) the effort of any bond of X (f(X) the flow)
+    MSf  f = its argument, likewise
     De   f = 0, y = e                    Df  e = 0, y = f
     R    e = r f       C   f = c s e     I   e = i s f
     TF   (bond 1 into it, bond 2 out)    e1 = n e2, f2 = n f1
@@ -80,10 +82,16 @@ def equations(graph: BondGraph, values: Mapping[sympy.Symbol, sympy.Expr]):
         p = component.argument.value.xreplace(values) if component.argument is not None else None
         if p is not None and p.has(sympy.zoo, sympy.oo, sympy.nan):
             raise Singular(f"the parameter of {component.label} is infinite")
-        if kind in ("Se", "Sf", "De", "Df", "R", "C", "I"):
+        if kind in ("Se", "Sf", "MSe", "MSf", "De", "Df", "R", "C", "I"):
             (bond,) = touching
             E, F = e[bond.number], f[bond.number]
-            if kind == "Se":
+            if kind in ("MSe", "MSf"):
+                signals = {}
+                for use in component.argument.signals:
+                    read = next(b.number for b in bonds.values() if use.target in (b.tail, b.head))
+                    signals[use.symbol] = (e if use.kind == "e" else f)[read]
+                rows.append((E if kind == "MSe" else F) - p.xreplace(signals))
+            elif kind == "Se":
                 rows.append(E - (U if name == graph.input else 0))
             elif kind == "Sf":
                 rows.append(F - (U if name == graph.input else 0))

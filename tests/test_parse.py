@@ -535,3 +535,62 @@ def test_large_but_allowed_numbers_are_exact_and_printable():
     assert value_of("2.5e-3999") == Rational(25, 10**4000)
     assert len(str(value_of("9" * MAX_DIGITS))) == MAX_DIGITS
     assert value_of("1e0000000000000000003") == 1000  # leading zeros in the exponent
+
+
+# signals (modulated sources) -------------------------------------------------------
+
+
+def test_signal_terms_are_symbols_of_their_own_with_places(models):
+    parsed = models.parse("model m\nparam l\nunknown k\nMSf:gas_in(l/k * e(x2) - 2*f(pipe))\n")
+    argument = parsed.declarations[0].use.argument
+    l_, k_ = sympy.symbols("l k")
+    assert argument.value == l_ / k_ * Symbol("e(x2)") - 2 * Symbol("f(pipe)")
+    assert [(u.kind, u.target, u.position) for u in argument.signals] == [
+        ("e", "x2", Position(4, 18)),
+        ("f", "pipe", Position(4, 28)),
+    ]
+    assert [u.name for u in argument.names] == ["l", "k"]  # the signals' components are not
+    assert argument.signal_problem is None
+
+
+def test_a_signal_may_name_a_subsystems_component_with_a_dotted_name(models):
+    argument = models.parse("model m\nMSe:x(2*e(motor.shaft))\n").declarations[0].use.argument
+    assert [(u.text, u.position) for u in argument.signals] == [("e(motor.shaft)", Position(2, 9))]
+    assert argument.value == 2 * Symbol("e(motor.shaft)")
+
+
+@pytest.mark.parametrize(
+    ("text", "message", "column"),
+    [
+        ("e(x) + 1", "a constant term", 8),
+        ("2 - f(x)*k", "a constant term", 1),
+        ("e(x)*f(y)", "a product of signals", 6),
+        ("k*sqrt(e(x))", "a signal inside a function", 8),
+        ("e(x)^2", "a signal in a power", 1),
+        ("2^e(x)", "a signal in a power", 3),
+        ("k/(1 + e(x))", "a signal in a denominator", 8),
+        ("e(2*x)", "its argument is a component's name", 3),
+    ],
+)
+def test_where_an_argument_stops_being_linear_in_its_signals(models, text, message, column):
+    problem = models.parse(f"model m\nMSf:z({text})\n").declarations[0].use.argument.signal_problem
+    assert message in problem.message and problem.position == Position(2, 6 + column)
+
+
+def test_linear_combinations_of_signals_with_parameter_coefficients(models):
+    for text in ("e(x)", "-f(y)", "(k + 1)*e(x)/k - f(y)*2^k", "e(x) + 0", "e(x)*(2 - 2)"):
+        argument = models.parse(f"model m\nMSf:z({text})\n").declarations[0].use.argument
+        assert argument.signal_problem is None, text
+
+
+def test_e_and_f_are_still_parameter_names(models):
+    graph = models.build(
+        "model m\nparam e = 2\nparam f = 3\nSe:v -> 1:j\n1:j -> R:r(e*f)\n1:j -> Df:i\n"
+    )
+    assert graph.component("r").argument.value == Symbol("e") * Symbol("f")
+
+
+def test_only_signals_take_dotted_names(models):
+    assert syntax_errors("model m\nparam p = sqrt(a.b)\n") == [
+        (2, 16, "a.b: a dotted name only names a signal, in e(...) or f(...)")
+    ]

@@ -107,6 +107,13 @@ TEXTBOOK = {
     # loading; r = tau/3 = 2 and R:load(g) (g symbolic) across c:
     # (v - vc)/2 = (c s + 1/g) vc -> vc/v = g / (2 c g s + g + 2).
     "several_ports": (g, 2 * c * g * s + g + 2),
+    # Modulated flow: x1 = u/(s + 1) drains through the pipe, f(pipe) = x1; tank 2 balances
+    # s x2 + x2 = (l/k) x2 - 2 x1, so x2 (s + 1 - 1/k) = -2 u/(s + 1) with l = 1:
+    # G = -2 k / ((s + 1)(k s + k - 1)) = -2 k / (k s^2 + (2 k - 1) s + k - 1).
+    "mixing_tanks": (-2 * k, k * s**2 + (2 * k - 1) * s + k - 1),
+    # Modulated effort: the amplifier's g v drives r + 1/(c s): i = g c s v/(r c s + 1);
+    # r = 2, c = 1/2: g s / (2 s + 2), and content 1 over g and s: g s / (2 s + 2).
+    "amplifier": (g * s, 2 * s + 2),
 }
 
 

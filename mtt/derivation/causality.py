@@ -156,7 +156,8 @@ def assign(graph: BondGraph) -> CausalBondGraph:
     # A junction with a single bond fixes that bond's causality as a source does (a
     # 0-junction sets its flow to zero, a 1-junction its effort): it goes first too.
     ends = [c for c in by_role[Role.JUNCTION] if len(graph.ports(c.name)) == 1]
-    for component in by_role[Role.SOURCE] + by_role[Role.DETECTOR] + ends:
+    fixed = by_role[Role.SOURCE] + by_role[Role.MODULATED] + by_role[Role.DETECTOR]
+    for component in fixed + ends:
         port = graph.ports(component.name)[0].bond
         try:
             state.choose(component.name, port, component.type.causality.imposes_effort)

@@ -102,7 +102,21 @@ def _parameter_values(causal: CausalBondGraph, parametrisation: Parametrisation)
     return values
 
 
-def _port_variables(causal: CausalBondGraph, component: Component, value) -> PortVariables:
+def _signals(graph, component: Component, value) -> tuple[tuple[str, sympy.Expr], ...]:
+    """A modulated source's signals as (bond variable, coefficient): e(X) and f(X) read the
+    variable of X's bond (of its first bond, for a junction, where all are equal)."""
+    if not component.type.modulated:
+        return ()
+    uses = {use.symbol: use for use in component.argument.signals}
+    return tuple(
+        (f"{use.kind}{graph.ports(use.target)[0].bond}", value.diff(symbol))
+        for symbol, use in uses.items()
+    )
+
+
+def _port_variables(
+    causal: CausalBondGraph, component: Component, value, signals: tuple
+) -> PortVariables:
     graph = causal.bondgraph
     ports = graph.ports(component.name)
     storage = component.type.role is Role.STORAGE
@@ -115,6 +129,7 @@ def _port_variables(causal: CausalBondGraph, component: Component, value) -> Por
         rate="d" + _energy(component) if storage else None,
         drive=INPUT if component.name == graph.input else None,
         measure=OUTPUT if component.name == graph.output else None,
+        signals=signals,
     )
 
 
@@ -175,13 +190,16 @@ def derive(causal: CausalBondGraph, parametrisation: Parametrisation) -> Equatio
     """
     graph = causal.bondgraph
     values = _parameter_values(causal, parametrisation)
-    K = _coefficient_domain(list(values.values()), parametrisation.free)
+    signals = {c.name: _signals(graph, c, values.get(c.name)) for c in graph.components}
+    coefficients = [v for name, v in values.items() if not signals[name]]
+    coefficients += [c for terms in signals.values() for _, c in terms]
+    K = _coefficient_domain(coefficients, parametrisation.free)
     explicit: dict[str, Form] = {}
     extra: list[str] = []
     constraints: list[Form] = []
     storage = [c for c in graph.components if c.type.role is Role.STORAGE]
     for component in graph.components:
-        v = _port_variables(causal, component, values.get(component.name))
+        v = _port_variables(causal, component, values.get(component.name), signals[component.name])
         rows = [
             {name: K.from_sympy(c) for name, c in row.items()} for row in component.type.relation(v)
         ]

@@ -25,6 +25,7 @@ from mtt.language.diagnostics import (
     error,
     warning,
 )
+from mtt.language.expressions import SIGNALS, SignalUse
 from mtt.language.parse import (
     RESERVED,
     ComponentUse,
@@ -119,6 +120,23 @@ class BondGraph:
         return next(b for b in self.bonds if b.number == number)
 
 
+def signal_readable(kind: str, target: ComponentType) -> bool:
+    """e(X) reads a 0-junction's common effort or a one-port's; f(X) a 1-junction's flow."""
+    junction = "0" if kind == "e" else "1"
+    return target.name == junction or target.ports is PortRule.ONE
+
+
+def _unreadable(use: SignalUse, target: ComponentType) -> str:
+    variable = SIGNALS[use.kind]
+    if target.role is Role.JUNCTION:
+        other = "f" if use.kind == "e" else "e"
+        return (
+            f"{use.text}: a {target.summary} has no common {variable}; "
+            f"read {other}({use.target}) or the {variable} of one of its one-ports"
+        )
+    return f"{use.text}: a {target.summary} has two {variable}s; read the junction beside it"
+
+
 def _article(noun: str) -> str:
     return "an" if noun[0] in "aeiou" else "a"
 
@@ -208,7 +226,14 @@ class _Checker:
                     seen.name, kind, use.argument, seen.position, seen.description
                 )
         for name, component in self.components.items():
-            if component.type.takes_argument and component.argument is None:
+            if component.type.modulated and component.argument is None:
+                self.report(
+                    "bad_argument",
+                    f"{component.label} needs an argument: the signals that modulate it, "
+                    f"such as {component.type.name}:{name}(2*e(x))",
+                    component.position,
+                )
+            elif component.type.takes_argument and component.argument is None:
                 use = ComponentUse(component.type.name, name, None, component.position)
                 self.components[name] = Component(
                     name,
@@ -251,6 +276,51 @@ class _Checker:
                     f"parameter {use.name!r} is not declared{hint}",
                     use.position,
                 )
+
+    def check_signals(self) -> None:
+        """Signal terms only in modulated sources' arguments, each a linear combination of
+        signals of components that have them."""
+        expressions = [p.value for p in self.parameters.values() if p.value is not None]
+        for component in self.components.values():
+            if not component.type.modulated:
+                expressions.append(component.argument)
+            elif component.argument is not None:
+                self._check_modulation(component.argument)
+        for expression in expressions:
+            if expression is None:
+                continue
+            if expression.signals:
+                self.report(
+                    "bad_signal",
+                    f"{expression.signals[0].text} is a signal: signals are read only in the "
+                    "argument of an MSe or MSf",
+                    expression.signals[0].position,
+                )
+            elif expression.signal_problem:
+                problem = expression.signal_problem
+                self.report("bad_signal", problem.message, problem.position)
+
+    def _check_modulation(self, argument: Expression) -> None:
+        if argument.signal_problem:
+            problem = argument.signal_problem
+            self.report("bad_signal", problem.message, problem.position)
+        elif not argument.signals:
+            self.report(
+                "bad_signal",
+                "no signal term: a modulated source's argument is a combination of signals "
+                "e(X) and f(X) with coefficients",
+                argument.position,
+            )
+        for use in argument.signals:
+            target = self.components.get(use.target)
+            if target is None:
+                self.report(
+                    "undeclared_component",
+                    f"{use.text} reads component {use.target!r}, which is not declared",
+                    use.position,
+                )
+            elif not signal_readable(use.kind, target.type):
+                self.report("bad_signal", _unreadable(use, target.type), use.position)
 
     def check_cycles(self) -> None:
         depends = nx.DiGraph()
@@ -369,7 +439,10 @@ class _Checker:
             )
             return None
         if component.type.role is not role:
-            self.report(kind, f"{component.label}{how} is not a {role.value}", chosen.position)
+            what = f"a {role.value}"
+            if component.type.role is Role.MODULATED:
+                what += " (a modulated source is never the input: its value is a signal)"
+            self.report(kind, f"{component.label}{how} is not {what}", chosen.position)
             return None
         return chosen.name
 
@@ -387,6 +460,7 @@ def build(parsed: ParsedModel, selection: Selection | None = None) -> BondGraph:
     checker.check_parameters()
     checker.check_components()
     checker.check_names()
+    checker.check_signals()
     checker.check_cycles()
     unknowns = checker.check_unknowns()
 

@@ -22,6 +22,7 @@ import sympy
 
 class Role(Enum):
     SOURCE = "source"
+    MODULATED = "modulated source"
     DETECTOR = "detector"
     RESISTOR = "resistor"
     STORAGE = "storage"
@@ -68,6 +69,7 @@ class PortVariables:
     rate: str | None = None
     drive: str | None = None  # the input u, or None for a source set to zero
     measure: str | None = None  # the output y, or None for an unused detector
+    signals: tuple[tuple[str, sympy.Expr], ...] = ()  # a modulated source's (variable, coefficient)
 
     def sign(self, port: int) -> int:
         return 1 if self.inward[port] else -1
@@ -88,6 +90,7 @@ class ComponentType:
     relation: Relation
     energy_prefix: str | None = None  # the letter of a storage element's energy variable
     conventional_inward: bool | None = None  # for one-ports: the usual bond direction
+    modulated: bool = False  # its argument, required, is a linear combination of signals
 
 
 def _source(on_effort: bool) -> Relation:
@@ -96,6 +99,18 @@ def _source(on_effort: bool) -> Relation:
         row = {variable: sympy.Integer(1)}
         if v.drive:
             row[v.drive] = sympy.Integer(-1)
+        return [row]
+
+    return relation
+
+
+def _modulated(on_effort: bool) -> Relation:
+    """e (or f) = sum of coefficient * signal: the signals are other bonds' variables."""
+
+    def relation(v: PortVariables) -> list[Row]:
+        row = {v.efforts[0] if on_effort else v.flows[0]: sympy.Integer(1)}
+        for variable, coefficient in v.signals:
+            row[variable] = row.get(variable, sympy.Integer(0)) - coefficient
         return [row]
 
     return relation
@@ -172,6 +187,11 @@ LIBRARY: dict[str, ComponentType] = {
                       _FIXED_EFFORT, _source(on_effort=True), conventional_inward=False),
         ComponentType("Sf", "flow source", Role.SOURCE, PortRule.ONE, False,
                       _FIXED_FLOW, _source(on_effort=False), conventional_inward=False),
+        # Modulated sources are as often sinks (an outflow) as sources: no usual direction.
+        ComponentType("MSe", "modulated effort source", Role.MODULATED, PortRule.ONE, True,
+                      _FIXED_EFFORT, _modulated(on_effort=True), modulated=True),
+        ComponentType("MSf", "modulated flow source", Role.MODULATED, PortRule.ONE, True,
+                      _FIXED_FLOW, _modulated(on_effort=False), modulated=True),
         ComponentType("De", "effort detector", Role.DETECTOR, PortRule.ONE, False,
                       _FIXED_FLOW, _detector(reads_effort=True), conventional_inward=True),
         ComponentType("Df", "flow detector", Role.DETECTOR, PortRule.ONE, False,

@@ -8,54 +8,28 @@ from a model ever reaches eval, exec, sympify or parse_expr.
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
-from fractions import Fraction
 from functools import cache
 
 import lark
 import sympy
-from lark import Token, Transformer
+from lark import Token
 
 from mtt.language.diagnostics import Diagnostic, ModelError, Position, Source, error
+from mtt.language.expressions import (
+    LAPLACE,
+    MAX_DIGITS,
+    RESERVED,
+    Expression,
+    ExpressionRules,
+    NameUse,
+    SignalUse,
+)
 from mtt.resources import resource_dir
 
-FUNCTIONS = {
-    "sqrt": sympy.sqrt,
-    "exp": sympy.exp,
-    "log": sympy.log,
-    "sin": sympy.sin,
-    "cos": sympy.cos,
-}
-CONSTANTS = {"pi": sympy.pi}
-LAPLACE = "s"
-RESERVED = frozenset({LAPLACE, *FUNCTIONS, *CONSTANTS})
+__all__ = ["LAPLACE", "MAX_DIGITS", "RESERVED", "Expression", "NameUse", "SignalUse"]
 
-# Exact arithmetic on untrusted input must not be asked to build astronomically
-# large numbers (`1e999999999`, `10^10^10`): these bounds keep every literal and
-# every numeric result to at most this many decimal digits. It stays below the
-# 4300 digits CPython converts between int and str by default (sys.int_info), so
-# every accepted value can still be printed.
-MAX_DIGITS = 4000
-# Roots and transcendental functions of a number make sympy look for perfect powers
-# and factors: quick for numbers of everyday size, minutes for thousands of digits.
-MAX_ROOT_DIGITS = 100
 MAX_SYNTAX_ERRORS = 50
-
-
-@dataclass(frozen=True)
-class NameUse:
-    name: str
-    position: Position
-
-
-@dataclass(frozen=True)
-class Expression:
-    """A parsed expression: its exact sympy value and every name it uses, with places."""
-
-    value: sympy.Expr
-    names: tuple[NameUse, ...]
-    position: Position
 
 
 @dataclass(frozen=True)
@@ -179,137 +153,10 @@ def _syntax_message(exc: lark.exceptions.UnexpectedInput, parser: lark.Lark) -> 
     return "unexpected end of file"
 
 
-def _number(text: str) -> sympy.Rational:
-    mantissa, _, exponent = text.lower().partition("e")
-    if len(mantissa) > MAX_DIGITS:
-        raise _ExpressionProblem("number has too many digits")
-    sign = -1 if exponent.startswith("-") else 1
-    exponent = exponent.lstrip("+-").lstrip("0") or "0"
-    if len(exponent) > len(str(MAX_DIGITS)):
-        raise _ExpressionProblem("number out of range")
-    value = Fraction(mantissa) * Fraction(10) ** (sign * int(exponent))
-    return sympy.Rational(value.numerator, value.denominator)
-
-
-def _digits(value: sympy.Expr) -> float:
-    """The decimal digits of the largest numerator or denominator among value's numbers."""
-    return max(
-        (math.log10(max(abs(r.p), abs(r.q), 1)) for r in value.atoms(sympy.Rational)), default=0
-    )
-
-
-class _ExpressionProblem(Exception):
-    """Raised inside the transformer; becomes a positioned `syntax` diagnostic."""
-
-
-@dataclass(frozen=True)
-class _Partial:
-    """An expression under construction: sympy value and the names it uses."""
-
-    value: sympy.Expr
-    names: tuple[NameUse, ...]
-    position: Position
-
-
-def _binary(op):
-    def build(self, children: list[_Partial]) -> _Partial:
-        a, b = children
-        return self._result(op(a.value, b.value), a.names + b.names, a.position)
-
-    return build
-
-
-class _ToModel(Transformer):
+class _ToModel(ExpressionRules):
     """Bottom-up: tokens and subtrees to sympy values and statement records."""
 
-    def __init__(self, problems: list[Diagnostic]):
-        super().__init__()
-        self.problems = problems
-
-    def _result(self, value, names, position: Position) -> _Partial:
-        """A computed value, unless it is undefined or too large: that is reported, and a
-        placeholder symbol stands in for it so that no second error follows from it."""
-        problem = None
-        if value.has(sympy.nan, sympy.zoo, sympy.oo, -sympy.oo):
-            problem = "the value is undefined or infinite"
-        elif _digits(value) > MAX_DIGITS:
-            problem = "number out of range"
-        if problem:
-            self.problems.append(error("syntax", problem, position))
-            return _Partial(sympy.Dummy(), names, position)
-        return _Partial(value, names, position)
-
-    # expressions
-    def number(self, children):
-        (token,) = children
-        try:
-            value = _number(str(token))
-        except _ExpressionProblem as problem:
-            self.problems.append(error("syntax", str(problem), _at(token)))
-            return _Partial(sympy.Integer(0), (), _at(token))
-        return self._result(value, (), _at(token))
-
-    def name(self, children):
-        (token,) = children
-        if str(token) in CONSTANTS:
-            return _Partial(CONSTANTS[str(token)], (), _at(token))
-        use = NameUse(str(token), _at(token))
-        return _Partial(sympy.Symbol(str(token)), (use,), _at(token))
-
-    def call(self, children):
-        token, argument = children
-        function = FUNCTIONS.get(str(token))
-        if function is None:
-            known = " ".join(FUNCTIONS)
-            self.problems.append(
-                error("syntax", f"unknown function {str(token)!r} (known: {known})", _at(token))
-            )
-            return argument
-        if _digits(argument.value) > MAX_ROOT_DIGITS:
-            self.problems.append(error("syntax", f"argument of {token} out of range", _at(token)))
-            return argument
-        return self._result(function(argument.value), argument.names, _at(token))
-
-    add = _binary(lambda a, b: a + b)
-    sub = _binary(lambda a, b: a - b)
-    mul = _binary(lambda a, b: a * b)
-
-    def div(self, children):
-        a, b = children
-        if b.value == 0:
-            self.problems.append(error("syntax", "division by zero", b.position))
-            return a
-        return self._result(a.value / b.value, a.names + b.names, a.position)
-
-    def neg(self, children):
-        (a,) = children
-        return _Partial(-a.value, a.names, a.position)
-
-    def pow(self, children):
-        base, operator, exponent = children
-        b, x = base.value, exponent.value
-        if isinstance(x, sympy.Number):
-            size = _digits(b) if isinstance(b, sympy.Number) else max(_digits(b), 1)
-            too_big = abs(x) * size > MAX_DIGITS or (b == 0 and x < 0)
-            too_big |= not x.is_Integer and _digits(b) > MAX_ROOT_DIGITS
-        else:
-            too_big = False
-        if too_big:
-            self.problems.append(error("syntax", "power out of range", _at(operator)))
-            return base
-        return self._result(b**x, base.names + exponent.names, base.position)
-
-    def expression(self, children):
-        (partial,) = children
-        return partial
-
     # statements
-    @staticmethod
-    def _expression(partial: _Partial | None) -> Expression | None:
-        if partial is None:
-            return None
-        return Expression(partial.value, partial.names, partial.position)
-
     @staticmethod
     def _text(token: Token | None) -> str | None:
         return None if token is None else str(token)[1:-1]
@@ -320,9 +167,7 @@ class _ToModel(Transformer):
 
     def _parameter(self, children, unknown: bool):
         name, value, description = children
-        return ParameterDecl(
-            str(name), self._expression(value), self._text(description), unknown, _at(name)
-        )
+        return ParameterDecl(str(name), value, self._text(description), unknown, _at(name))
 
     def param_stmt(self, children):
         return self._parameter(children, unknown=False)
@@ -333,7 +178,7 @@ class _ToModel(Transformer):
     def component(self, children):
         token, argument = children
         type_, _, name = str(token).partition(":")
-        return ComponentUse(type_, name, self._expression(argument), _at(token))
+        return ComponentUse(type_, name, argument, _at(token))
 
     def declaration(self, children):
         use, description = children
