@@ -19,8 +19,8 @@ MODELS = ROOT / "models"
 SYSTEMS = Path(__file__).resolve().parent / "data" / "systems"
 
 DC_DRIVE_THETA = [[10, 0], [10, 10], [1, 11], [0, 10], [0, 1], [-10, 0], [0, 0], [0, -10]]
-JSON_KEYS = ["model", "input", "output", "unknown", "unknowns", "monomials", "degrees", "symbols",
-             "num", "den", "n", "m", "N", "theta", "order"]  # fmt: skip
+JSON_KEYS = ["ok", "model", "input", "output", "unknown", "unknowns", "monomials", "degrees",
+             "symbols", "num", "den", "n", "m", "N", "theta", "order"]  # fmt: skip
 
 
 def run(capsys, *argv) -> tuple[int, str, str]:
@@ -93,6 +93,7 @@ def test_tf_symbolic_rlc_json(mtt):
     record = json.loads(done.stdout)
     check_json_shape(record)
     assert record == {
+        "ok": True,
         "model": "rlc",
         "input": "Se:v",
         "output": "Df:i",

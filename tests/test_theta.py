@@ -161,7 +161,7 @@ def test_json_record_shape():
     theta = theta_for(MODELS / "dc_drive.bg")
     record = derived_json(theta, order=4)
     assert list(record) == [
-        "model", "input", "output", "unknown", "unknowns", "monomials", "degrees", "symbols",
+        "ok", "model", "input", "output", "unknown", "unknowns", "monomials", "degrees", "symbols",
         "num", "den", "n", "m", "N", "theta", "order",
     ]  # fmt: skip
     assert record["theta"][0] == ["10", "0"]

@@ -174,29 +174,51 @@ def _load(args) -> BondGraph:
 
 
 def cmd_show(args) -> int:
-    print(describe(_load(args)))
+    from mtt.cli import report
+
+    graph = _load(args)
+    if args.json:
+        _print_json(report.show_json(graph))
+    else:
+        print(describe(graph))
     return EXIT_OK
 
 
 def cmd_causality(args) -> int:
+    from mtt.cli import report
     from mtt.derivation.causality import assign
     from mtt.derivation.causality import describe as describe_causality
 
-    print(describe_causality(assign(_load(args))))
+    causal = assign(_load(args))
+    if args.json:
+        _print_json(report.causality_json(causal))
+    else:
+        print(describe_causality(causal))
     return EXIT_OK
 
 
 def _equations(args) -> Equations:
     from mtt.derivation.pipeline import equations_for
 
-    return equations_for(_load(args), choice_from_args(args))
+    graph = _load(args)
+    for name, _ in args.overrides:
+        if name in graph.unknowns:
+            print(
+                f"mtt {args.command}: warning: --set {name}=...: {name} is an unknown, which "
+                "stays symbolic here (its value is the true value of simulations)",
+                file=sys.stderr,
+            )
+    return equations_for(graph, choice_from_args(args))
 
 
 def cmd_ss(args) -> int:
     from mtt.cli import report
 
     equations = _equations(args)
-    print(report.ss_latex(equations) if args.latex else report.ss_text(equations))
+    if args.json:
+        _print_json(report.ss_json(equations))
+    else:
+        print(report.ss_latex(equations) if args.latex else report.ss_text(equations))
     return EXIT_OK
 
 
@@ -261,6 +283,7 @@ def make_parser() -> argparse.ArgumentParser:
     )
     show.add_argument("file", metavar="FILE")
     add_selection_options(show)
+    show.add_argument("--json", action="store_true", help="print one JSON object")
     show.set_defaults(run=cmd_show)
 
     causality = commands.add_parser(
@@ -271,6 +294,7 @@ def make_parser() -> argparse.ArgumentParser:
     )
     causality.add_argument("file", metavar="FILE")
     add_selection_options(causality)
+    causality.add_argument("--json", action="store_true", help="print one JSON object")
     causality.set_defaults(run=cmd_causality)
 
     for name, run, summary in (
@@ -284,8 +308,7 @@ def make_parser() -> argparse.ArgumentParser:
         command.add_argument("file", metavar="FILE")
         add_parameter_options(command)
         command.add_argument("--latex", action="store_true", help="print LaTeX")
-        if name != "ss":
-            command.add_argument("--json", action="store_true", help="print one JSON object")
+        command.add_argument("--json", action="store_true", help="print one JSON object")
         command.set_defaults(run=run)
 
     experiment_args.register(commands)
@@ -299,6 +322,8 @@ def main(argv: list[str] | None = None) -> int:
         return args.run(args)
     except MttError as exc:  # a ModelError renders every problem in the model
         print(exc.render(), file=sys.stderr)
+        if getattr(args, "json", False) and args.command != "check":  # check has its records
+            _print_json(exc.to_json())
         return EXIT_MODEL_ERROR
     except KeyboardInterrupt:
         print("mtt: interrupted", file=sys.stderr)

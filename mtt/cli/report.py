@@ -4,9 +4,11 @@ from __future__ import annotations
 
 import sympy
 
+from mtt.derivation.causality import CausalBondGraph
 from mtt.derivation.equations import Equations
 from mtt.derivation.theta import Theta
 from mtt.derivation.transfer import LAPLACE
+from mtt.language.bondgraph import BondGraph
 
 
 def in_powers_of_s(expression: sympy.Expr) -> str:
@@ -102,6 +104,7 @@ def theta_latex(theta: Theta) -> str:
 def derived_json(theta: Theta, order: int) -> dict:
     """The `tf --json` / `theta --json` record (its shape is a public contract)."""
     return {
+        "ok": True,
         "model": theta.model,
         "input": theta.input,
         "output": theta.output,
@@ -136,6 +139,81 @@ def ss_text(equations: Equations) -> str:
         lines += ["", f"{name} ="]
         lines += ["  " + line for line in sympy.pretty(matrix, use_unicode=False).splitlines()]
     return "\n".join(lines)
+
+
+def show_json(graph: BondGraph) -> dict:
+    """The `show --json` record: parameters, components and numbered bonds."""
+    label = lambda name: graph.component(name).label  # noqa: E731
+    return {
+        "ok": True,
+        "file": graph.source.name,
+        "model": graph.name,
+        "description": graph.description,
+        "parameters": {
+            p.name: {
+                "value": None if p.value is None else str(p.value.value),
+                "unknown": p.name in graph.unknowns,
+                "description": p.description,
+            }
+            for p in graph.parameters.values()
+        },
+        "components": [
+            {
+                "name": c.name,
+                "type": c.type.name,
+                "argument": None if c.argument is None else str(c.argument.value),
+            }
+            for c in graph.components
+        ],  # fmt: skip
+        "bonds": [
+            {"number": b.number, "tail": label(b.tail), "head": label(b.head)} for b in graph.bonds
+        ],  # fmt: skip
+        "input": label(graph.input),
+        "output": label(graph.output),
+        "unknowns": list(graph.unknowns),
+    }
+
+
+def causality_json(causal: CausalBondGraph) -> dict:
+    """The `causality --json` record: the component at the stroke end of every bond."""
+    graph = causal.bondgraph
+    label = lambda name: graph.component(name).label  # noqa: E731
+    return {
+        "ok": True,
+        "model": graph.name,
+        "bonds": [
+            {
+                "number": b.number,
+                "tail": label(b.tail),
+                "head": label(b.head),
+                "stroke": label(causal.stroke_at(b.number)),
+            }
+            for b in graph.bonds
+        ],  # fmt: skip
+        "dependent": [label(name) for name in causal.dependent],
+        "loops": [label(name) for name in causal.loops],
+    }
+
+
+def ss_json(equations: Equations) -> dict:
+    """The `ss --json` record: every entry an exact expression, as text."""
+    graph = equations.causal.bondgraph
+    params = equations.parametrisation
+    matrices = {
+        name: [[str(entry) for entry in matrix.row(i)] for i in range(matrix.rows)]
+        for name, matrix in equations.matrices().items()
+    }
+    return {
+        "ok": True,
+        "model": graph.name,
+        "input": graph.component(graph.input).label,
+        "output": graph.component(graph.output).label,
+        "unknowns": list(params.unknowns),
+        "symbols": list(params.symbols),
+        "relations": [[name, str(expression)] for name, expression in equations.relations],
+        "states": list(equations.states),
+        **matrices,
+    }
 
 
 def ss_latex(equations: Equations) -> str:

@@ -155,6 +155,12 @@ class MttError(Exception):
         where = ":".join(str(part) for part in place if part is not None)
         return f"{where + ': ' if where else ''}error[{self.kind}]: {self}"
 
+    def to_json(self) -> dict:
+        """The `--json` record of a command that failed: `ok` false and the errors."""
+        error = {"file": self.file, "kind": self.kind, "line": self.line,
+                 "column": self.column, "message": str(self), "notes": []}  # fmt: skip
+        return {"ok": False, "errors": [error]}
+
 
 class ModelError(MttError):
     """A model that cannot be processed; `diagnostics` holds every problem found.
@@ -189,6 +195,9 @@ class ModelError(MttError):
 
     def render(self) -> str:
         return "\n".join(d.render() for d in self.diagnostics)
+
+    def to_json(self) -> dict:
+        return {"ok": False, "errors": [d.to_json() for d in self.errors]}
 
     def kinds(self) -> list[str]:
         return [d.kind for d in self.errors]

@@ -287,12 +287,13 @@ def parse_expression(text: str, variables: frozenset[str] = frozenset({LAPLACE})
     for use in partial.names:
         if use.name not in variables:
             allowed = ", ".join(sorted(variables))
+            hint = (
+                f"use {allowed}"
+                if variables
+                else "a value here is a number or an expression of numbers"
+            )
             problems.append(
-                error(
-                    "undeclared_parameter",
-                    f"unknown name {use.name!r} (use {allowed})",
-                    use.position,
-                )
+                error("undeclared_parameter", f"unknown name {use.name!r} ({hint})", use.position)
             )
     if problems:
         raise ModelError(source, problems)
