@@ -144,3 +144,14 @@ def test_the_figure_has_a_line_a_barb_and_a_stroke_per_bond():
     (with_strokes,) = draw.figure(graph, assign(graph)).axes
     (without,) = draw.figure(graph).axes
     assert (len(with_strokes.lines), len(without.lines)) == (3 * 11, 2 * 11)
+
+
+def test_signals_of_modulated_sources_are_drawn_as_dashed_arrows():
+    graph = load(mtt.example("absorber"))  # MSf streams read the stage concentrations
+    assert draw.signals(graph) == [
+        ("liquid1", "x1"), ("liquid2", "x2"), ("product", "x3"),
+        ("gas3", "x3"), ("gas2", "x2"), ("off_gas", "x1"),
+    ]  # fmt: skip
+    (ax,) = draw.figure(graph).axes
+    arrows = [child for child in ax.texts if getattr(child, "arrow_patch", None) is not None]
+    assert len(arrows) == 6

@@ -1,5 +1,8 @@
 """A bond graph as a picture: component labels, bonds with half-arrows, causal strokes.
 
+The signals a modulated source reads (e(X), f(X): no power, no bond) are dashed full
+arrows from the component read to the source.
+
 The layout is networkx's (Kamada-Kawai: bonds of even length, few crossings); matplotlib
 draws it. Each bond runs between the boxes of its two labels, with the half-arrow at the
 head (the direction of positive power) and, once causality is assigned, the causal stroke
@@ -27,7 +30,7 @@ from mtt.language.components import Role
 BOND_LENGTH = 1.0  # layout units between bonded labels
 TICK = 0.09  # half-arrow barb and causal stroke, in layout units
 GAP = 0.07  # between a label and the bonds that end at it
-INK, NUMBER_INK = "#1a1a1a", "#7a7a7a"
+INK, NUMBER_INK, SIGNAL_INK = "#1a1a1a", "#7a7a7a", "#b04a1a"
 ROLE_INK = {Role.SOURCE: "#1f5fa8", Role.DETECTOR: "#1f5fa8", Role.JUNCTION: "#1a1a1a"}
 
 
@@ -125,7 +128,23 @@ def figure(graph: BondGraph, causal: CausalBondGraph | None = None) -> Figure:
         at_head = None if causal is None else causal.stroke_at(bond.number) == bond.head
         _draw(ax, bond_picture(bond.number, position[bond.tail], position[bond.head],
                                half[bond.tail], half[bond.head], at_head))  # fmt: skip
+    for reader, read in signals(graph):
+        start, end = bond_picture(0, position[read], position[reader], half[read],
+                                  half[reader], None).line  # fmt: skip
+        ax.annotate("", xy=end, xytext=start, arrowprops={
+            "arrowstyle": "-|>", "linestyle": (0, (4, 3)), "color": SIGNAL_INK,
+            "shrinkA": 0, "shrinkB": 0, "lw": 1.0, "connectionstyle": "arc3,rad=0.25"})  # fmt: skip
     return fig
+
+
+def signals(graph: BondGraph) -> list[tuple[str, str]]:
+    """(modulated source, component it reads) for every signal, once each."""
+    pairs = []
+    for component in graph.components:
+        for use in getattr(component.argument, "signals", ()) or ():
+            if (component.name, use.target) not in pairs:
+                pairs.append((component.name, use.target))
+    return pairs
 
 
 def _draw(ax, bond: BondPicture) -> None:
