@@ -57,8 +57,8 @@ def test_compile_errors_are_messages(tmp_path, capsys):
     status, _, err = mtt(capsys, "compile", str(model), "--keep", "beta")
     assert status == 2
     assert "error[reserved_name]: the parameter 'beta' cannot be kept symbolic" in err
-    status, _, err = mtt(capsys, "compile", str(model), "-o", str(tmp_path / "no" / "m.py"))
-    assert status == 2 and "mtt compile: error:" in err and "No such file" in err
+    status, _, err = mtt(capsys, "compile", str(model), "-o", "")
+    assert status == 2 and "mtt compile: error: -o needs a file or a directory" in err
     status, _, err = mtt(capsys, "compile", str(tmp_path / "missing.bg"))
     assert status == 2 and "error[io]" in err
 

@@ -240,10 +240,17 @@ class Model:
         return self.transfer_function.at(**values)
 
     def compile(self, path: str | Path) -> Path:
-        """Write the standalone estimator module (numpy and scipy only) to `path`."""
-        path = Path(path)
-        codegen.write_atomic(path, codegen.render(self._checked_theta()))
-        return path
+        """Write the standalone estimator module (numpy and scipy only) to `path`, or to
+        MODEL.py inside it when it is a directory; return the file written."""
+        theta = self._checked_theta()
+        try:
+            target = codegen.output_path(str(path), theta)
+            codegen.write_atomic(target, codegen.render(theta))
+        except (OSError, ValueError) as exc:
+            name = getattr(exc, "filename", None) or str(path)
+            reason = getattr(exc, "strerror", None) or str(exc)
+            raise MttError(f"{name}: {reason}", kind="io", file=str(path)) from None
+        return target
 
     @cached_property
     def _estimator(self) -> ModuleType:

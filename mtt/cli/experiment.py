@@ -14,7 +14,6 @@ import json
 import sys
 from collections.abc import Callable
 from dataclasses import dataclass
-from pathlib import Path
 from types import ModuleType
 
 import numpy as np
@@ -212,9 +211,7 @@ def guarded(action: Callable[[argparse.Namespace], int]) -> Callable[[argparse.N
 def cmd_compile(args) -> int:
     theta = pipeline.theta_for(args.file, choice_from_args(args))
     source = codegen.render(theta)
-    path = Path(args.path) if args.path else codegen.default_path(theta)
-    if not args.path:
-        path.parent.mkdir(parents=True, exist_ok=True)
+    path = codegen.output_path(args.path, theta)
     codegen.write_atomic(path, source)
     kept = f", {', '.join(theta.symbols)} kept symbolic" if theta.symbols else ""
     print(

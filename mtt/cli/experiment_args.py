@@ -68,7 +68,8 @@ def register(commands) -> None:
         "--out",
         metavar="PATH",
         dest="path",
-        help="where to write it (default generated/MODEL.py)",
+        help="the file to write, or a directory to write MODEL.py into (default "
+        "generated/MODEL.py); a link is written through, a device or fifo refused",
     )
     add_parameter_options(compile_)
     compile_.set_defaults(run=_implementation("cmd_compile"))

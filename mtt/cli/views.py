@@ -47,6 +47,16 @@ def _print_json(record: dict) -> None:
     print(json.dumps(record))
 
 
+def _save(figure, path: str) -> None:
+    """Write a picture; a path that cannot be written is the user's error, said as such."""
+    from mtt.cli import draw
+
+    try:
+        draw.save(figure, path)
+    except OSError as exc:
+        raise MttError(f"{exc.filename or path}: {exc.strerror}", kind="io") from None
+
+
 def cmd_draw(args) -> int:
     from mtt.cli import draw
     from mtt.derivation.causality import assign
@@ -60,7 +70,7 @@ def cmd_draw(args) -> int:
         problem = exc
         print(exc.render(), file=sys.stderr)
         print(f"mtt draw: warning: drawn without causal strokes ({exc.kind})", file=sys.stderr)
-    draw.save(draw.figure(graph, causal), args.out)
+    _save(draw.figure(graph, causal), args.out)
     if args.json:
         _print_json(
             {"ok": True, "file": args.file, "out": args.out, "model": graph.name,
@@ -74,7 +84,7 @@ def cmd_draw(args) -> int:
 
 def cmd_bode(args) -> int:
     from mtt.api.model import Model
-    from mtt.cli import bode, draw
+    from mtt.cli import bode
     from mtt.derivation.pipeline import load
 
     choice = choice_from_args(args)
@@ -100,7 +110,7 @@ def cmd_bode(args) -> int:
     data = bode.bode(systems)
     if args.out:
         title = f"{model.name}: Bode diagram from {model.input} to {model.output}"
-        draw.save(bode.figure(data, unknown=unknown or "k", title=title), args.out)
+        _save(bode.figure(data, unknown=unknown or "k", title=title), args.out)
     if args.json:
         _print_json(
             {"ok": True, "file": args.file, "out": args.out, "model": model.name,

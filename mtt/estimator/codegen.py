@@ -10,10 +10,12 @@ is safe to run, and the same Theta always gives the same bytes.
 
 from __future__ import annotations
 
+import errno
 import importlib.util
 import keyword
 import os
 import re
+import stat
 import sys
 import tempfile
 import textwrap
@@ -231,21 +233,53 @@ def default_path(theta: Theta) -> Path:
     return Path("generated") / f"{theta.model}.py"
 
 
+def output_path(given: str | None, theta: Theta) -> Path:
+    """Where `mtt compile -o GIVEN` writes: generated/MODEL.py by default, MODEL.py inside
+    GIVEN when it is a directory (or ends with a slash), else GIVEN itself."""
+    if given is None:
+        return default_path(theta)
+    if not given:
+        raise ValueError("-o needs a file or a directory, not an empty name")
+    path = Path(given)
+    if path.is_dir() or given.endswith(("/", os.sep)):
+        return path / default_path(theta).name
+    return path
+
+
 def write_atomic(path: str | Path, data: str | bytes) -> None:
-    """Write a file so that readers see the old content or the new, never a part."""
-    path = Path(path)
+    """Write a file so that readers see the old content or the new, never a part.
+
+    A missing directory is created; a symbolic link is written through (its target is
+    replaced, the link stays); anything that is not a regular file (a device such as
+    /dev/null, a fifo, a directory) is refused, never replaced.
+    """
+    if not str(path):
+        raise ValueError("an empty file name")
+    target = Path(os.path.realpath(path))
+    mode = None
+    try:
+        status = os.stat(target)
+    except FileNotFoundError:
+        target.parent.mkdir(parents=True, exist_ok=True)
+    else:
+        if not stat.S_ISREG(status.st_mode):
+            what = "a directory" if stat.S_ISDIR(status.st_mode) else "not a regular file"
+            raise OSError(errno.EEXIST, f"{what}: not replaced", str(path))
+        mode = stat.S_IMODE(status.st_mode)
     payload = data.encode("utf-8") if isinstance(data, str) else data
     try:
-        handle, temporary = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.")
+        handle, temporary = tempfile.mkstemp(dir=target.parent, prefix=f".{target.name}.")
     except OSError as exc:  # name the file asked for, not the temporary one
         raise OSError(exc.errno, exc.strerror, str(path)) from None
     try:
         with os.fdopen(handle, "wb") as file:
             file.write(payload)
-        umask = os.umask(0)
-        os.umask(umask)
-        os.chmod(temporary, 0o666 & ~umask)
-        os.replace(temporary, path)
+        if mode is None:
+            umask = os.umask(0)
+            os.umask(umask)
+            mode = 0o666 & ~umask
+        os.chmod(temporary, mode)
+        os.replace(temporary, target)
     except BaseException:
         Path(temporary).unlink(missing_ok=True)
         raise

@@ -1,0 +1,106 @@
+"""Files written by mtt are handled as carefully as model text (issue 12, item 9)."""
+
+from __future__ import annotations
+
+import os
+import stat
+
+import pytest
+
+import mtt
+from mtt.cli.main import main
+from mtt.estimator import codegen
+
+RLC = str(mtt.example("rlc"))
+
+
+def test_a_missing_directory_is_created(tmp_path):
+    target = tmp_path / "a" / "b" / "out.txt"
+    codegen.write_atomic(target, "x\n")
+    assert target.read_text() == "x\n"
+
+
+def test_a_symbolic_link_is_written_through(tmp_path):
+    real = tmp_path / "real.py"
+    real.write_text("old\n")
+    link = tmp_path / "link.py"
+    link.symlink_to(real)
+    codegen.write_atomic(link, "new\n")
+    assert link.is_symlink() and real.read_text() == "new\n"
+    dangling = tmp_path / "dangling.py"
+    dangling.symlink_to(tmp_path / "sub" / "made.py")
+    codegen.write_atomic(dangling, "made\n")
+    assert (tmp_path / "sub" / "made.py").read_text() == "made\n" and dangling.is_symlink()
+
+
+@pytest.mark.parametrize("kind", ["fifo", "directory"])
+def test_anything_but_a_regular_file_is_refused_and_kept(tmp_path, kind):
+    target = tmp_path / "special"
+    if kind == "fifo":
+        os.mkfifo(target)
+    else:
+        target.mkdir()
+    with pytest.raises(OSError, match="not replaced"):
+        codegen.write_atomic(target, "x")
+    mode = os.stat(target).st_mode
+    assert (stat.S_ISFIFO if kind == "fifo" else stat.S_ISDIR)(mode)
+    assert [p.name for p in tmp_path.iterdir()] == ["special"]  # no temporary left
+
+
+def test_an_empty_name_is_refused(tmp_path):
+    with pytest.raises(ValueError, match="empty"):
+        codegen.write_atomic("", "x")
+
+
+def test_replacing_a_file_keeps_its_permissions(tmp_path):
+    target = tmp_path / "tool.py"
+    target.write_text("old\n")
+    target.chmod(0o750)
+    codegen.write_atomic(target, "new\n")
+    assert stat.S_IMODE(os.stat(target).st_mode) == 0o750
+
+
+def run(capsys, *argv):
+    status = main(list(argv))
+    out, err = capsys.readouterr()
+    return status, out, err
+
+
+def test_compile_into_a_directory_writes_model_py_there(tmp_path, capsys):
+    for given in (str(tmp_path), str(tmp_path / "new") + "/"):
+        status, out, _ = run(capsys, "compile", RLC, "-o", given)
+        assert status == 0 and "rlc.py" in out
+    assert (tmp_path / "rlc.py").is_file() and (tmp_path / "new" / "rlc.py").is_file()
+
+
+def test_compile_refuses_a_special_file_and_an_empty_name(tmp_path, capsys):
+    fifo = tmp_path / "pipe"
+    os.mkfifo(fifo)
+    status, _, err = run(capsys, "compile", RLC, "-o", str(fifo))
+    assert status == 2 and f"{fifo}: not a regular file: not replaced" in err
+    assert stat.S_ISFIFO(os.stat(fifo).st_mode)
+    status, _, err = run(capsys, "compile", RLC, "-o", "")
+    assert status == 2 and "-o needs a file or a directory, not an empty name" in err
+
+
+def test_model_compile_reports_file_errors_as_mtt_errors(tmp_path):
+    model = mtt.load(RLC)
+    assert model.compile(tmp_path) == tmp_path / "rlc.py"
+    fifo = tmp_path / "pipe"
+    os.mkfifo(fifo)
+    with pytest.raises(mtt.MttError) as caught:
+        model.compile(fifo)
+    assert caught.value.kind == "io" and "not a regular file" in str(caught.value)
+
+
+def test_draw_creates_the_directory_of_its_picture(tmp_path, capsys):
+    out = tmp_path / "figures" / "rlc.svg"
+    status, _, _ = run(capsys, "draw", RLC, "-o", str(out))
+    assert status == 0 and out.is_file()
+
+
+def test_draw_to_a_special_file_is_an_error_not_a_crash(tmp_path, capsys):
+    fifo = tmp_path / "pipe.svg"
+    os.mkfifo(fifo)
+    status, _, err = run(capsys, "draw", RLC, "-o", str(fifo))
+    assert status == 2 and "error[io]" in err and "not a regular file" in err
