@@ -123,6 +123,48 @@ def cmd_bode(args) -> int:
     return EXIT_OK
 
 
+def cmd_examples(args) -> int:
+    from mtt.derivation.pipeline import read_source
+    from mtt.estimator.codegen import write_atomic
+    from mtt.language.parse import parse
+    from mtt.resources import resource_dir
+
+    directory = resource_dir("models")
+    files = sorted(directory.glob("*.bg"))
+    listed = []
+    for path in files:
+        header = parse(read_source(path)).header
+        listed.append({"name": path.stem, "description": header.description if header else None,
+                       "file": str(path)})  # fmt: skip
+    copied = []
+    if args.copy is not None:
+        target = Path(args.copy)
+        for path in files:  # every file: a model's subsystem files come with it
+            destination = target / path.name
+            text = path.read_text(encoding="utf-8")
+            if destination.exists() and not args.force:
+                if destination.read_text(encoding="utf-8") != text:
+                    raise MttError(f"{destination} exists and differs from the example: "
+                                   "not replaced (--force replaces it)", kind="io")  # fmt: skip
+                continue
+            try:
+                write_atomic(destination, text)
+            except OSError as exc:
+                raise MttError(f"{exc.filename}: {exc.strerror}", kind="io") from None
+            copied.append(str(destination))
+    if args.json:
+        _print_json({"ok": True, "examples": listed, "copied": copied})
+        return EXIT_OK
+    if args.copy is not None:
+        print(f"copied {len(copied)} example model(s) to {args.copy}")
+        return EXIT_OK
+    width = max(len(item["name"]) for item in listed)
+    for item in listed:
+        print(f"{item['name']:{width}}  {item['description'] or ''}".rstrip())
+    print(f"\n(in {directory}; mtt examples --copy DIR copies them)")
+    return EXIT_OK
+
+
 def register(commands) -> None:
     """Add draw, bode and examples to the `mtt` subcommands."""
     draw = commands.add_parser(
@@ -154,3 +196,14 @@ def register(commands) -> None:
     bode.add_argument("--json", action="store_true",
                       help="print the frequencies, magnitudes and phases as JSON")  # fmt: skip
     bode.set_defaults(run=cmd_bode)
+
+    examples = commands.add_parser(
+        "examples",
+        help="list the example models, or copy them to a directory",
+        description="List the example models shipped with mtt (the paper's DC drive and "
+        "absorber among them), or copy them all to a directory to start from.",
+    )
+    examples.add_argument("--copy", metavar="DIR", help="copy every example model into DIR")
+    examples.add_argument("--force", action="store_true", help="replace files that differ")
+    examples.add_argument("--json", action="store_true", help="print one JSON object")
+    examples.set_defaults(run=cmd_examples)

@@ -1,0 +1,57 @@
+"""The example models ship with mtt: `mtt examples` lists them and copies them out."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import pytest
+
+import mtt
+from mtt.cli.main import main
+
+ROOT = Path(__file__).resolve().parent.parent
+
+
+def run(capsys, *argv):
+    status = main(list(argv))
+    out, err = capsys.readouterr()
+    return status, out, err
+
+
+def test_the_examples_are_the_models_directory():
+    names = sorted(path.stem for path in (ROOT / "models").glob("*.bg"))
+    assert mtt.example("dc_drive").read_text() == (ROOT / "models" / "dc_drive.bg").read_text()
+    assert {"dc_drive", "absorber", "rlc"} <= set(names)
+
+
+def test_examples_lists_each_model_with_its_description(capsys):
+    status, out, _ = run(capsys, "examples", "--json")
+    record = json.loads(out)
+    assert status == 0 and record["ok"]
+    described = {item["name"]: item["description"] for item in record["examples"]}
+    assert described["rlc"] == "series RLC circuit"
+    status, out, _ = run(capsys, "examples")
+    assert "dc_drive  voltage-driven DC motor with a flexible shaft" in out
+
+
+def test_examples_copy_into_a_new_directory_and_keep_edits(tmp_path, capsys):
+    target = tmp_path / "mine"
+    status, out, _ = run(capsys, "examples", "--copy", str(target))
+    assert (
+        status == 0 and (target / "absorber.bg").read_text() == mtt.example("absorber").read_text()
+    )
+    assert run(capsys, "examples", "--copy", str(target))[0] == 0  # the same files: nothing to do
+    (target / "rlc.bg").write_text("# my edits\n")
+    status, _, err = run(capsys, "examples", "--copy", str(target))
+    assert status == 2 and "rlc.bg exists and differs from the example: not replaced" in err
+    assert (target / "rlc.bg").read_text() == "# my edits\n"
+    assert run(capsys, "examples", "--copy", str(target), "--force")[0] == 0
+    assert (target / "rlc.bg").read_text() == mtt.example("rlc").read_text()
+    assert main(["check", str(target / "rlc.bg")]) == 0
+
+
+def test_an_unknown_example_names_those_there_are():
+    with pytest.raises(mtt.MttError) as caught:
+        mtt.example("nope")
+    assert caught.value.kind == "io" and "dc_drive" in str(caught.value)
