@@ -118,14 +118,22 @@ class Model:
 
     >>> import mtt
     >>> model = mtt.load(mtt.example("dc_drive"))
-    >>> model.name, model.unknowns, model.input, model.output
-    ('dc_drive', ('k',), 'Se:v', 'Df:vm')
+    >>> model
+    Model('dc_drive', unknowns=('k',), input='Se:v', output='Df:vm')
+    >>> model.theta, model.state_space
+    (Theta(8x2, monomials (1, k)), StateSpace(states=('p_ia', 'p_jm', 'q_cs', 'p_jl')))
     >>> model.causality.strokes[1]
     '1:a'
     """
 
     bondgraph: BondGraph
     choice: ParameterChoice
+
+    def __repr__(self) -> str:
+        return (
+            f"Model({self.name!r}, unknowns={self.unknowns}, input={self.input!r}, "
+            f"output={self.output!r})"
+        )
 
     @property
     def name(self) -> str:

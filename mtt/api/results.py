@@ -165,6 +165,9 @@ class TransferFunction:
     def __str__(self) -> str:
         return report.tf_text(self.theta)
 
+    def __repr__(self) -> str:
+        return f"TransferFunction({self.expr})"
+
     def _repr_latex_(self) -> str:
         return f"$\\displaystyle {report.tf_latex(self.theta)}$"
 
@@ -234,6 +237,10 @@ class Theta:
     def __str__(self) -> str:
         return report.theta_text(self.theta)
 
+    def __repr__(self) -> str:
+        rows, columns = self.matrix.shape
+        return f"Theta({rows}x{columns}, monomials {self.monomials})"
+
     def _repr_latex_(self) -> str:
         K = sympy.latex(sympy.Matrix([self.monomials]))
         return f"$\\displaystyle {report.theta_latex(self.theta)}, \\quad K^T = {K}$"
@@ -267,6 +274,9 @@ class StateSpace:
 
     def __str__(self) -> str:
         return report.ss_text(self.equations)
+
+    def __repr__(self) -> str:
+        return f"StateSpace(states={self.states})"
 
     def _repr_latex_(self) -> str:
         body = ",\\quad ".join(
@@ -304,3 +314,6 @@ class Causality:
 
     def __str__(self) -> str:
         return describe(self.causal)
+
+    def __repr__(self) -> str:
+        return f"Causality(strokes={self.strokes})"
