@@ -263,3 +263,11 @@ def test_import_mtt_is_light_until_the_api_is_used():
     before, after, names = json.loads(output.stdout)
     assert (before, after) == (False, True)
     assert set(mtt.__all__) <= set(names)
+
+
+def test_a_value_that_lowers_a_degree_gives_the_shorter_polynomials(dc_drive, recwarn):
+    # k = 0: no load inertia, G(s) = 10 / (s^2 + 10 s + 10)
+    num, den = dc_drive.transfer_function.at(k=0)
+    assert (num.tolist(), den.tolist()) == ([10.0], [1.0, 10.0, 10.0])
+    dc_drive.to_scipy(0)
+    assert not [w for w in recwarn if "coefficients" in str(w.message)]  # scipy's BadCoefficients

@@ -56,6 +56,10 @@ def _numeric(expr: sympy.Expr, what: str) -> float:
     return number
 
 
+def _leading_zeros_dropped(coefficients: np.ndarray) -> np.ndarray:
+    return np.trim_zeros(coefficients, "f") if coefficients.any() else coefficients[-1:]
+
+
 @dataclass(frozen=True)
 class _Values:
     """Values for the free names of a result: the unknowns and the known parameters kept
@@ -152,7 +156,8 @@ class TransferFunction:
 
     def at(self, **values: object) -> tuple[np.ndarray, np.ndarray]:
         """(num, den) as float arrays, highest power of s first (scipy.signal's order), for
-        the values given; a name not given takes the model file's value."""
+        the values given; a name not given takes the model file's value. A value that
+        lowers a degree (k = 0, say) gives the shorter array, without leading zeros."""
         substitution = _Values(self.theta).substitution(values)
         num, den = (
             np.array([_numeric(c.xreplace(substitution), f"a coefficient of {part}") for c in p])
@@ -160,7 +165,7 @@ class TransferFunction:
         )
         if not den.any():
             raise MttError(f"the denominator of G(s) is zero at {values}", kind="singular_model")
-        return num, den
+        return _leading_zeros_dropped(num), _leading_zeros_dropped(den)
 
     def __str__(self) -> str:
         return report.tf_text(self.theta)

@@ -27,14 +27,9 @@ class Bode:
     phase_deg: np.ndarray
 
 
-def _trimmed(coefficients: np.ndarray) -> np.ndarray:
-    """Without leading zeros (a value of k can lower a degree), never empty."""
-    return np.trim_zeros(coefficients, "f") if coefficients.any() else np.zeros(1)
-
-
 def bode(systems: Sequence[tuple[float, np.ndarray, np.ndarray]]) -> Bode:
-    """The Bode data of (k, num, den) for each value of k (num, den highest power first)."""
-    systems = [(k, _trimmed(num), _trimmed(den)) for k, num, den in systems]
+    """The Bode data of (k, num, den) for each value of k (num, den highest power first,
+    without leading zeros)."""
     grids = [signal.findfreqs(num, den, POINTS) for _, num, den in systems]
     low = min(float(grid[0]) for grid in grids)
     high = max(float(grid[-1]) for grid in grids)
