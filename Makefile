@@ -43,6 +43,7 @@ demo: $(STAMP)
 # (substituting them first would give a canonical Theta scaled by 2, and with the same
 # S0 a different trajectory). Its experiments below pass the same option.
 COMPILE_OPTIONS_absorber := --keep tau,l
+COMPILE_OPTIONS_absorber_stages := --keep tau,l
 # The two-unknown DC motor: estimators of several unknowns are to come (issue 11); until
 # then its estimator identifies the load inertia, with the armature resistance known.
 COMPILE_OPTIONS_dc_motor := --unknown jl

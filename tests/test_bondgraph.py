@@ -222,7 +222,7 @@ def test_rendered_error_has_location_kind_source_line_and_caret(models):
     lines = problem.render().splitlines()
     assert lines[0] == (
         "test.bg:3:16: error[unknown_component_type]: "
-        "unknown component type 'Q' (known: Se Sf MSe MSf De Df R C I TF GY 0 1)"
+        "unknown component type 'Q' (known: Se Sf MSe MSf De Df R C I TF GY 0 1 SS)"
     )
     assert lines[1] == " 3 | Se:v -> 1:j -> Q:x"
     assert lines[2] == "   |                ^"

@@ -53,22 +53,29 @@ def test_dc_drive_theta_eq_25():
 ABSORBER_DEN = l_ * ((k + s * tau + 1) * (3 * s * tau + 1) * k + (s * tau + 1) ** 3 + k**3)
 
 
-def test_absorber_transfer_function_eq_26():
+# the pseudo bond graph in one file, and assembled from one stage file used three times
+ABSORBERS = pytest.mark.parametrize("model", ["absorber.bg", "absorber_stages.bg"])
+
+
+@ABSORBERS
+def test_absorber_transfer_function_eq_26(model):
     # G(s) = k^3 / (l [(k + s tau + 1)(3 s tau + 1) k + (s tau + 1)^3 + k^3])
-    tf = transfer_for(MODELS / "absorber.bg", ParameterChoice(keep=frozenset({"tau", "l"})))
+    tf = transfer_for(MODELS / model, ParameterChoice(keep=frozenset({"tau", "l"})))
     assert expanded_equal(tf.numerator, k**3)
     assert expanded_equal(tf.denominator, ABSORBER_DEN)
 
 
-def test_absorber_transfer_function_with_defaults():
+@ABSORBERS
+def test_absorber_transfer_function_with_defaults(model):
     # tau = 2, l = 1/2: k^3 / ((1/2) [...]) = 2 k^3 / [...]
-    tf = transfer_for(MODELS / "absorber.bg")
+    tf = transfer_for(MODELS / model)
     assert expanded_equal(tf.numerator, 2 * k**3)
     assert expanded_equal(tf.denominator, 2 * ABSORBER_DEN.subs({tau: 2, l_: sympy.Rational(1, 2)}))
 
 
-def test_absorber_theta_eq_27():
-    theta = theta_for(MODELS / "absorber.bg", ParameterChoice(keep=frozenset({"tau", "l"})))
+@ABSORBERS
+def test_absorber_theta_eq_27(model):
+    theta = theta_for(MODELS / model, ParameterChoice(keep=frozenset({"tau", "l"})))
     assert (theta.n, theta.m, theta.N) == (3, 0, 3)
     expected = sympy.Matrix(
         [
@@ -84,14 +91,18 @@ def test_absorber_theta_eq_27():
     assert theta.defaults == {"tau": 2, "l": sympy.Rational(1, 2)}
 
 
-def test_absorber_theta_with_defaults():
+@ABSORBERS
+def test_absorber_theta_with_defaults(model):
     # eq. (27) at tau = 2, l = 1/2, times 2 (the canonical form has content 1)
-    theta = theta_for(MODELS / "absorber.bg")
+    theta = theta_for(MODELS / model)
     assert theta.matrix == sympy.Matrix(
         [[1, 1, 1, 1], [6, 8, 6, 0], [12, 12, 0, 0], [8, 0, 0, 0], [0, 0, 0, -2]]
     )
     assert theta.true_value == sympy.Rational(72, 100)
-    assert dict(theta.assumed) == {"tau": 2, "l": sympy.Rational(1, 2)}
+    assert {n: v for n, v in theta.assumed.items() if "." not in n} == {
+        "tau": 2,
+        "l": sympy.Rational(1, 2),
+    }
 
 
 # --- general rules -----------------------------------------------------------------------

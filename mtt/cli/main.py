@@ -68,6 +68,11 @@ def _summary(
         record["unknown"] = [p.name for p in parsed.parameters if p.unknown]
     if graph is not None:
         record["components"] = graph.graph.number_of_nodes()
+        record["bonds"] = len(graph.bonds)
+        record["parameters"] = {
+            p.name: None if p.value is None else str(p.value.value)
+            for p in graph.parameters.values()
+        }
         record["input"] = graph.component(graph.input).label
         record["output"] = graph.component(graph.output).label
         record["unknown"] = list(graph.unknowns)
@@ -154,6 +159,17 @@ def describe(graph: BondGraph) -> str:
         for b in graph.bonds
     ]
     lines += _table(rows)
+    if graph.subsystems:
+        lines += ["", f"subsystems ({len(graph.subsystems)})"]
+        rows = []
+        for sub in graph.subsystems:
+            indent = "  " * sub.name.count(".")
+            bindings = ", ".join(f"{name} = {value}" for name, value in sub.bindings)
+            rows.append(
+                (indent + sub.name.rpartition(".")[2], sub.file, bindings and f"({bindings})",
+                 sub.description or "")
+            )  # fmt: skip
+        lines += _table(rows)
     lines += [
         "",
         f"input   {graph.component(graph.input).label}",

@@ -109,7 +109,7 @@ def _signals(graph, component: Component, value) -> tuple[tuple[str, sympy.Expr]
         return ()
     uses = {use.symbol: use for use in component.argument.signals}
     return tuple(
-        (f"{use.kind}{graph.ports(use.target)[0].bond}", value.diff(symbol))
+        (f"{use.kind}{graph.reading(use.target)}", value.diff(symbol))
         for symbol, use in uses.items()
     )
 

@@ -10,21 +10,11 @@ from mtt.derivation.parameters import ParameterChoice, parametrise
 from mtt.derivation.theta import Theta, theta_matrix
 from mtt.derivation.transfer import TransferFunction, transfer_function
 from mtt.language.bondgraph import BondGraph, Selection, build
-from mtt.language.diagnostics import ModelError, Source, error
+from mtt.language.diagnostics import ModelError, error
 from mtt.language.parse import parse
+from mtt.language.subsystems import read_source
 
-
-def read_source(path: str | Path) -> Source:
-    """A model file's text (a UTF-8 byte order mark is dropped); unreadable files are model
-    errors too (kind `io`)."""
-    name = str(path)
-    try:
-        return Source(name, Path(path).read_text(encoding="utf-8-sig"))
-    except (OSError, UnicodeDecodeError) as exc:
-        reason = exc.strerror if isinstance(exc, OSError) and exc.strerror else str(exc)
-        raise ModelError(
-            Source(name, ""), [error("io", f"cannot read the file: {reason}")]
-        ) from None
+__all__ = ["read_source", "load", "equations_for", "transfer_for", "theta_for"]
 
 
 def load(path: str | Path, selection: Selection | None = None) -> BondGraph:

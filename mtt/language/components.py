@@ -28,6 +28,7 @@ class Role(Enum):
     STORAGE = "storage"
     TWO_PORT = "two-port"
     JUNCTION = "junction"
+    PORT = "port"  # a subsystem's external port: joined to its parent's bond, it disappears
 
 
 class PortRule(Enum):
@@ -87,7 +88,7 @@ class ComponentType:
     ports: PortRule
     takes_argument: bool
     causality: CausalRule
-    relation: Relation
+    relation: Relation | None  # None for SS, which is never in an assembled bond graph
     energy_prefix: str | None = None  # the letter of a storage element's energy variable
     conventional_inward: bool | None = None  # for one-ports: the usual bond direction
     modulated: bool = False  # its argument, required, is a linear combination of signals
@@ -216,5 +217,7 @@ LIBRARY: dict[str, ComponentType] = {
         ComponentType("1", "1-junction (common flow)", Role.JUNCTION, PortRule.ANY, False,
                       CausalRule(CausalKind.EXACTLY_ONE, imposes_effort=True),
                       _junction(common_effort=False)),
+        ComponentType("SS", "subsystem port", Role.PORT, PortRule.ONE, False,
+                      CausalRule(CausalKind.FREE), None),
     )
 }  # fmt: skip

@@ -69,12 +69,47 @@ class ComponentDecl:
 
 
 @dataclass(frozen=True)
+class PortUse:
+    """`NAME.PORT` as a bond's end: the port PORT (an `SS:PORT`) of the subsystem NAME."""
+
+    subsystem: str
+    port: str
+    position: Position
+
+    @property
+    def name(self) -> str:
+        return f"{self.subsystem}.{self.port}"
+
+    label = name
+
+
+@dataclass(frozen=True)
 class BondText:
     """`tail -> head`: positive power flows from tail to head."""
 
-    tail: ComponentUse
-    head: ComponentUse
+    tail: ComponentUse | PortUse
+    head: ComponentUse | PortUse
     position: Position
+
+
+@dataclass(frozen=True)
+class Binding:
+    """`p = EXPR` in a subsystem statement: the child's parameter p, set in the parent."""
+
+    name: str
+    value: Expression
+    position: Position
+
+
+@dataclass(frozen=True)
+class SubsystemDecl:
+    """`subsystem NAME = "FILE.bg" [(p = EXPR, ...)] ["description"]`."""
+
+    name: str
+    file: str  # as written, relative to the including file's directory
+    bindings: tuple[Binding, ...]
+    description: str | None
+    position: Position  # of the name
 
 
 @dataclass(frozen=True)
@@ -83,8 +118,8 @@ class PortDecl:
 
     role: str
     type: str
-    name: str
-    position: Position
+    name: str  # dotted for a subsystem's component
+    position: Position | None  # None for a choice made on the command line
 
 
 @dataclass(frozen=True)
@@ -95,13 +130,14 @@ class ParsedModel:
     declarations: tuple[ComponentDecl, ...]
     bonds: tuple[BondText, ...]
     ports: tuple[PortDecl, ...]
+    subsystems: tuple[SubsystemDecl, ...] = ()
 
     @property
     def mentions(self) -> tuple[ComponentUse, ...]:
-        """Every component mention, in file order."""
+        """Every component mention (not the subsystems' ports), in file order."""
         uses = [d.use for d in self.declarations]
         for bond in self.bonds:
-            uses += [bond.tail, bond.head]
+            uses += [end for end in (bond.tail, bond.head) if isinstance(end, ComponentUse)]
         return tuple(sorted(set(uses), key=lambda u: u.position))
 
 
@@ -178,7 +214,42 @@ class _ToModel(ExpressionRules):
     def component(self, children):
         token, argument = children
         type_, _, name = str(token).partition(":")
+        if "." in name:
+            self.problems.append(
+                error(
+                    "syntax",
+                    f"{token}: a subsystem's component is reached only through its ports "
+                    "(NAME.PORT); dotted names are for input, output and signals",
+                    _at(token),
+                )
+            )
         return ComponentUse(type_, name, argument, _at(token))
+
+    def port_use(self, children):
+        (token,) = children
+        subsystem, _, port = str(token).partition(".")
+        if "." in port:
+            self.problems.append(
+                error(
+                    "syntax",
+                    f"{token}: a bond reaches a subsystem through one of its own ports, NAME.PORT",
+                    _at(token),
+                )
+            )
+        return PortUse(subsystem, port, _at(token))
+
+    def binding(self, children):
+        name, value = children
+        return Binding(str(name), value, _at(name))
+
+    def bindings(self, children):
+        return tuple(children)
+
+    def subsystem_stmt(self, children):
+        name, file, bindings, description = children
+        return SubsystemDecl(
+            str(name), self._text(file), bindings or (), self._text(description), _at(name)
+        )
 
     def declaration(self, children):
         use, description = children
@@ -258,6 +329,7 @@ def parse(source: Source) -> ParsedModel:
         declarations=tuple(s for s in statements if isinstance(s, ComponentDecl)),
         bonds=tuple(s for s in statements if isinstance(s, BondText)),
         ports=tuple(s for s in statements if isinstance(s, PortDecl)),
+        subsystems=tuple(s for s in statements if isinstance(s, SubsystemDecl)),
     )
 
 

@@ -1,0 +1,486 @@
+"""The rules of the language that one file obeys on its own, checked file by file.
+
+A model file and each subsystem file are checked in their own scope, with their own
+names: parameters, components (SS ports only in a subsystem's file), arguments, names in
+expressions, signals, cycles, bonds and arities, and each subsystem statement against
+the file it reads (its bindings, its ports, their use and direction). What concerns the
+whole model (the unknowns, the input and output, signals read across subsystems) is
+checked once the files are assembled (see `bondgraph`).
+"""
+
+from __future__ import annotations
+
+from collections import Counter
+from dataclasses import dataclass
+from functools import cached_property
+
+import networkx as nx
+import sympy
+
+from mtt.language.components import LIBRARY, ComponentType, PortRule, Role
+from mtt.language.diagnostics import Diagnostic, Origin, Position, error, warning
+from mtt.language.expressions import RESERVED, SIGNALS, Expression, NameUse, SignalUse
+from mtt.language.parse import ComponentUse, ParsedModel, PortUse
+from mtt.language.subsystems import Instance
+
+
+@dataclass(frozen=True)
+class Parameter:
+    name: str
+    value: Expression | None
+    description: str | None
+    declared_unknown: bool
+    position: Position
+
+
+@dataclass(frozen=True)
+class Component:
+    name: str
+    type: ComponentType
+    argument: Expression | None  # explicit, or the parameter of the same name
+    position: Position  # first mention
+    description: str | None
+
+    @property
+    def label(self) -> str:
+        return f"{self.type.name}:{self.name}"
+
+
+@dataclass(frozen=True)
+class LocalBond:
+    """A bond of one file, between its components or its subsystems' ports."""
+
+    tail: str  # a component's name, or `sub.port`
+    head: str
+    position: Position
+
+
+def signal_readable(kind: str, target: ComponentType) -> bool:
+    """e(X) reads a 0-junction's common effort or a one-port's; f(X) a 1-junction's flow."""
+    junction = "0" if kind == "e" else "1"
+    return target.name == junction or target.ports is PortRule.ONE
+
+
+def unreadable(use: SignalUse, target: ComponentType) -> str:
+    """Why a signal cannot be read from a component of this type."""
+    variable = SIGNALS[use.kind]
+    if target.role is Role.JUNCTION:
+        other = "f" if use.kind == "e" else "e"
+        return (
+            f"{use.text}: a {target.summary} has no common {variable}; "
+            f"read {other}({use.target}) or the {variable} of one of its one-ports"
+        )
+    return f"{use.text}: a {target.summary} has two {variable}s; read the junction beside it"
+
+
+def _article(noun: str) -> str:
+    return "an" if noun[0] in "aeiou" else "a"
+
+
+def _implied_argument(use: ComponentUse) -> Expression:
+    """`R:ra` means `R:ra(ra)`."""
+    return Expression(sympy.Symbol(use.name), (NameUse(use.name, use.position),), use.position)
+
+
+class FileCheck:
+    """Checks one instance of a file; each method checks one rule of the language.
+
+    `children` are its subsystems' checks (those that could be read), for the rules that
+    relate a subsystem statement to the file it reads.
+    """
+
+    def __init__(self, instance: Instance, children: dict[str, FileCheck]):
+        self.parsed: ParsedModel = instance.parsed
+        self.origin: Origin = instance.origin
+        self.in_subsystem = instance.declaration is not None
+        self.children = children
+        self.problems: list[Diagnostic] = []
+        self.warnings: list[Diagnostic] = []
+        self.components: dict[str, Component] = {}
+        self.parameters: dict[str, Parameter] = {}
+        self.bonds: list[LocalBond] = []
+        self.check()
+
+    def report(self, kind: str, message: str, position: Position | None = None) -> None:
+        self.problems.append(error(kind, message, position, self.origin))
+
+    def check(self) -> None:
+        if self.parsed.header is None or not self.parsed.bonds:
+            what = "no statement" if self.parsed.header is None else "no bond"
+            self.report("empty_model", f"the model has {what}")
+            return
+        self.check_parameters()
+        self.check_components()
+        self.check_subsystems()
+        self.check_names()
+        self.check_signals()
+        self.check_cycles()
+        self.check_bonds()
+        self.check_ports()
+        self.check_direction()
+
+    def check_parameters(self) -> None:
+        for decl in self.parsed.parameters:
+            if decl.name in RESERVED:
+                self.report(
+                    "bad_argument",
+                    f"{decl.name!r} is reserved and cannot name a parameter",
+                    decl.position,
+                )
+            elif decl.name in self.parameters:
+                first = self.parameters[decl.name].position
+                self.report(
+                    "duplicate_name",
+                    f"parameter {decl.name!r} is already declared on line {first.line}",
+                    decl.position,
+                )
+            else:
+                self.parameters[decl.name] = Parameter(
+                    decl.name, decl.value, decl.description, decl.unknown, decl.position
+                )
+
+    def check_components(self) -> None:
+        declared: dict[str, Position] = {}
+        repeated: set[Position] = set()
+        for decl in self.parsed.declarations:
+            name = decl.use.name
+            if name in declared:
+                repeated.add(decl.use.position)
+                self.report(
+                    "duplicate_name",
+                    f"component {name!r} is already declared on line {declared[name].line}",
+                    decl.use.position,
+                )
+            declared.setdefault(name, decl.use.position)
+        descriptions = {d.use.name: d.description for d in self.parsed.declarations}
+        argument_at: dict[str, Position] = {}
+        for use in self.parsed.mentions:
+            kind = LIBRARY.get(use.type)
+            if kind is None:
+                known = " ".join(LIBRARY)
+                self.report(
+                    "unknown_component_type",
+                    f"unknown component type {use.type!r} (known: {known})",
+                    use.position,
+                )
+                continue
+            seen = self.components.get(use.name)
+            if seen is not None and seen.type is not kind:
+                if use.position not in repeated:  # not reported twice
+                    self.report(
+                        "duplicate_name",
+                        f"{use.label} names the component {seen.label} "
+                        f"of line {seen.position.line} with another type",
+                        use.position,
+                    )
+                continue
+            if use.argument is not None:
+                self._check_argument(use, kind, argument_at)
+            if seen is None:
+                self.components[use.name] = Component(
+                    use.name, kind, use.argument, use.position, descriptions.get(use.name)
+                )
+            elif use.argument is not None and seen.argument is None:
+                self.components[use.name] = Component(
+                    seen.name, kind, use.argument, seen.position, seen.description
+                )
+        for name, component in self.components.items():
+            if component.type.role is Role.PORT and not self.in_subsystem:
+                self.report(
+                    "bad_port",
+                    f"{component.label}: SS ports belong to a file used as a subsystem, "
+                    "not to the model itself",
+                    component.position,
+                )
+            elif component.type.modulated and component.argument is None:
+                self.report(
+                    "bad_argument",
+                    f"{component.label} needs an argument: the signals that modulate it, "
+                    f"such as {component.type.name}:{name}(2*e(x))",
+                    component.position,
+                )
+            elif component.type.takes_argument and component.argument is None:
+                use = ComponentUse(component.type.name, name, None, component.position)
+                self.components[name] = Component(
+                    name,
+                    component.type,
+                    _implied_argument(use),
+                    component.position,
+                    component.description,
+                )
+
+    def _check_argument(self, use: ComponentUse, kind: ComponentType, seen: dict) -> None:
+        if not kind.takes_argument:
+            self.report(
+                "bad_argument",
+                f"{use.label} takes no argument: it is {_article(kind.summary)} {kind.summary}",
+                use.argument.position,
+            )
+        elif use.name in seen:
+            self.report(
+                "duplicate_argument",
+                f"the argument of {use.label} is already given on line {seen[use.name].line}",
+                use.argument.position,
+            )
+        else:
+            seen[use.name] = use.argument.position
+
+    def check_subsystems(self) -> None:
+        """Subsystem names (in the components' name space), and each binding."""
+        seen: dict[str, Position] = {}
+        for decl in self.parsed.subsystems:
+            other = seen.get(decl.name)
+            component = self.components.get(decl.name)
+            if other is None and component is not None:
+                if component.position < decl.position:
+                    other = component.position
+                else:
+                    self.report(
+                        "duplicate_name",
+                        f"{component.label}: the name is already used on line "
+                        f"{decl.position.line} by a subsystem",
+                        component.position,
+                    )
+            if other is not None:
+                self.report(
+                    "duplicate_name",
+                    f"subsystem {decl.name!r}: the name is already used on line {other.line}",
+                    decl.position,
+                )
+                continue
+            seen[decl.name] = decl.position
+            child = self.children.get(decl.name)
+            bound: dict[str, Position] = {}
+            for binding in decl.bindings:
+                if binding.name in bound:
+                    self.report(
+                        "duplicate_argument",
+                        f"subsystem {decl.name}: {binding.name} is already set on line "
+                        f"{bound[binding.name].line}",
+                        binding.position,
+                    )
+                elif child is not None and binding.name not in child.parameters:
+                    self.report(
+                        "undeclared_parameter",
+                        f"subsystem {decl.name}: its file {decl.file} declares no parameter "
+                        f"{binding.name!r}",
+                        binding.position,
+                    )
+                bound.setdefault(binding.name, binding.position)
+
+    def _expressions(self) -> list[Expression]:
+        """Every expression in this file's scope but the modulated sources' arguments."""
+        expressions = [p.value for p in self.parameters.values() if p.value is not None]
+        expressions += [
+            c.argument
+            for c in self.components.values()
+            if c.argument is not None and not c.type.modulated
+        ]
+        expressions += [b.value for d in self.parsed.subsystems for b in d.bindings]
+        return expressions
+
+    def check_names(self) -> None:
+        modulations = [c.argument for c in self.components.values() if c.type.modulated]
+        for expression in self._expressions() + [m for m in modulations if m is not None]:
+            for use in expression.names:
+                if use.name in self.parameters:
+                    continue
+                hint = (
+                    " (s, the Laplace variable, cannot appear in a parameter)"
+                    if use.name == "s"
+                    else ""
+                )
+                self.report(
+                    "undeclared_parameter",
+                    f"parameter {use.name!r} is not declared{hint}",
+                    use.position,
+                )
+
+    def check_signals(self) -> None:
+        """Signal terms only in modulated sources' arguments, each a linear combination of
+        signals of components that have them (a subsystem's, dotted, are checked later)."""
+        for component in self.components.values():
+            if component.type.modulated and component.argument is not None:
+                self._check_modulation(component.argument)
+        for expression in self._expressions():
+            if expression.signals:
+                self.report(
+                    "bad_signal",
+                    f"{expression.signals[0].text} is a signal: signals are read only in the "
+                    "argument of an MSe or MSf",
+                    expression.signals[0].position,
+                )
+            elif expression.signal_problem:
+                problem = expression.signal_problem
+                self.report("bad_signal", problem.message, problem.position)
+
+    def _check_modulation(self, argument: Expression) -> None:
+        if argument.signal_problem:
+            problem = argument.signal_problem
+            self.report("bad_signal", problem.message, problem.position)
+        elif not argument.signals:
+            self.report(
+                "bad_signal",
+                "no signal term: a modulated source's argument is a combination of signals "
+                "e(X) and f(X) with coefficients",
+                argument.position,
+            )
+        for use in argument.signals:
+            if "." in use.target:
+                continue
+            target = self.components.get(use.target)
+            if target is None:
+                self.report(
+                    "undeclared_component",
+                    f"{use.text} reads component {use.target!r}, which is not declared",
+                    use.position,
+                )
+            elif not signal_readable(use.kind, target.type):
+                self.report("bad_signal", unreadable(use, target.type), use.position)
+
+    def check_cycles(self) -> None:
+        depends = nx.DiGraph()
+        for p in self.parameters.values():
+            depends.add_node(p.name)
+            for use in p.value.names if p.value else ():
+                if use.name in self.parameters:
+                    depends.add_edge(p.name, use.name)
+        for group in nx.strongly_connected_components(depends):
+            first = min(group, key=lambda n: self.parameters[n].position)
+            if len(group) > 1 or depends.has_edge(first, first):
+                names = ", ".join(sorted(group))
+                self.report(
+                    "cyclic_definition",
+                    f"the values of {names} depend on each other in a cycle",
+                    self.parameters[first].position,
+                )
+
+    def _valid(self, end: ComponentUse | PortUse, counted: bool = False) -> bool:
+        """A mention of a component that exists with this type, or of a subsystem's port
+        (else it is reported). Any port counts in its neighbour's number of bonds: a wrong
+        one is reported once, as itself."""
+        if isinstance(end, PortUse):
+            return counted or end.port in self._ports(end.subsystem)
+        component = self.components.get(end.name)
+        return component is not None and component.type.name == end.type
+
+    def _ports(self, subsystem: str) -> dict[str, bool]:
+        child = self.children.get(subsystem)
+        return child.inward if child is not None else {}
+
+    def check_bonds(self) -> None:
+        inward, outward = Counter(), Counter()
+        for bond in self.parsed.bonds:
+            if bond.tail.name == bond.head.name:
+                self.report("self_bond", f"a bond from {bond.tail.label} to itself", bond.position)
+            if self._valid(bond.tail) and self._valid(bond.head):
+                self.bonds.append(LocalBond(bond.tail.name, bond.head.name, bond.position))
+            if self._valid(bond.tail, counted=True) and self._valid(bond.head, counted=True):
+                outward[bond.tail.name] += 1
+                inward[bond.head.name] += 1
+        for name, component in self.components.items():
+            ins, outs = inward[name], outward[name]
+            rule = component.type.ports
+            if ins + outs == 0:
+                self.report(
+                    "unconnected_component",
+                    f"{component.label} is not connected to any bond",
+                    component.position,
+                )
+            elif rule is PortRule.ONE and ins + outs != 1:
+                self.report(
+                    "bad_arity",
+                    f"{component.label} is a one-port but has {ins + outs} bonds",
+                    component.position,
+                )
+            elif rule is PortRule.TWO and (ins, outs) != (1, 1):
+                self.report(
+                    "bad_two_port",
+                    f"{component.label} needs one inward and one "
+                    f"outward bond, not {ins} inward and {outs} outward",
+                    component.position,
+                )
+
+    def check_ports(self) -> None:
+        """Each subsystem port bonded exactly once, in the direction its own bond agrees with."""
+        declared = {d.name: d for d in self.parsed.subsystems}
+        uses: dict[str, list] = {}
+        for bond in self.parsed.bonds:
+            for end, into_port in ((bond.head, True), (bond.tail, False)):
+                if not isinstance(end, PortUse):
+                    continue
+                decl = declared.get(end.subsystem)
+                if decl is None:
+                    self.report(
+                        "undeclared_component",
+                        f"{end.name}: there is no subsystem {end.subsystem!r}",
+                        end.position,
+                    )
+                    continue
+                if end.subsystem not in self.children:  # not read: reported there
+                    continue
+                ports = self._ports(end.subsystem)
+                if end.port not in ports:
+                    names = ", ".join(sorted(ports)) or "none"
+                    self.report(
+                        "bad_port",
+                        f"{end.name}: {decl.file} has no port SS:{end.port} (its ports: {names})",
+                        end.position,
+                    )
+                    continue
+                uses.setdefault(end.name, []).append(end)
+                if ports[end.port] == into_port:
+                    way, must = ("into", "out of") if into_port else ("out of", "into")
+                    self.report(
+                        "port_direction",
+                        f"{end.name}: the subsystem's own bond points {way} SS:{end.port}, so "
+                        f"this bond must point {must} the port",
+                        bond.position,
+                    )
+        for name, child in self.children.items():
+            for port in sorted(child.inward):
+                mentions = uses.get(f"{name}.{port}", [])
+                if not mentions:
+                    self.report(
+                        "unconnected_component",
+                        f"port {name}.{port} of subsystem {name} is not connected to any bond",
+                        declared[name].position,
+                    )
+                elif len(mentions) > 1:
+                    self.report(
+                        "bad_arity",
+                        f"port {name}.{port} is bonded {len(mentions)} times; a port joins "
+                        "exactly one bond",
+                        mentions[0].position,
+                    )
+
+    def check_direction(self) -> None:
+        degree = Counter(end for b in self.bonds for end in (b.tail, b.head))
+        heads = Counter(b.head for b in self.bonds)
+        for name, component in self.components.items():
+            usual = component.type.conventional_inward
+            if usual is None or degree[name] != 1:
+                continue
+            if (heads[name] == 1) != usual:
+                way = "out of" if usual else "into"
+                self.warnings.append(
+                    warning(
+                        "bond_direction",
+                        f"the bond of {component.label} points "
+                        f"{way} it, which makes it an active element",
+                        component.position,
+                        self.origin,
+                    )
+                )
+
+    @cached_property
+    def inward(self) -> dict[str, bool]:
+        """This file's SS ports: does its own bond point into the SS? (Known even when the
+        bond's other end is wrong: that is reported here, not at each use of the port.)"""
+        ports = {n for n, c in self.components.items() if c.type.role is Role.PORT}
+        into = {}
+        for bond in self.parsed.bonds:
+            for end, towards in ((bond.head, True), (bond.tail, False)):
+                if isinstance(end, ComponentUse) and end.type == "SS" and end.name in ports:
+                    into[end.name] = towards
+        return into
