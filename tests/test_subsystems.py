@@ -144,6 +144,14 @@ def test_show_draws_the_subsystem_tree(capsys):
         ["motor", str(HERE / "parts" / "motor.bg"), "(km", "=", "2,", "jm", "=", "1/10)"],
     ]
     assert out[at + 2].startswith("    motor")  # indented under drive
+    assert main(["show", "--json", str(HERE / "plant.bg")]) == 0
+    record = json.loads(capsys.readouterr().out)
+    assert record["subsystems"] == [
+        {"name": "drive", "file": str(HERE / "parts" / "geared.bg"),
+         "parameters": {"n": "1/2"}, "description": None},
+        {"name": "drive.motor", "file": str(HERE / "parts" / "motor.bg"),
+         "parameters": {"km": "2", "jm": "1/10"}, "description": None},
+    ]  # fmt: skip
 
 
 def test_check_json_counts_the_assembled_model(capsys):

@@ -142,7 +142,8 @@ def ss_text(equations: Equations) -> str:
 
 
 def show_json(graph: BondGraph) -> dict:
-    """The `show --json` record: parameters, components and numbered bonds."""
+    """The `show --json` record: parameters, components, numbered bonds and subsystems
+    (depth first: `motor.brush` follows `motor`)."""
     label = lambda name: graph.component(name).label  # noqa: E731
     return {
         "ok": True,
@@ -171,6 +172,15 @@ def show_json(graph: BondGraph) -> dict:
         "input": label(graph.input),
         "output": label(graph.output),
         "unknowns": list(graph.unknowns),
+        "subsystems": [
+            {
+                "name": sub.name,
+                "file": sub.file,
+                "parameters": {name: str(value) for name, value in sub.bindings},
+                "description": sub.description,
+            }
+            for sub in graph.subsystems
+        ],
     }
 
 

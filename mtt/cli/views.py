@@ -139,8 +139,9 @@ def cmd_examples(args) -> int:
     copied = []
     if args.copy is not None:
         target = Path(args.copy)
-        for path in files:  # every file: a model's subsystem files come with it
-            destination = target / path.name
+        # every file: a model's subsystem files (models/parts/) come with it
+        for path in sorted(directory.rglob("*.bg")):
+            destination = target / path.relative_to(directory)
             text = path.read_text(encoding="utf-8")
             if destination.exists() and not args.force:
                 if destination.read_text(encoding="utf-8") != text:
