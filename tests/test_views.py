@@ -50,6 +50,22 @@ def test_the_layout_is_deterministic_and_keeps_labels_apart():
     assert extent[0] >= extent[1]  # laid out wide
 
 
+def test_a_large_model_is_laid_out_fast_and_unknotted():
+    stages = 40  # 162 components: past Kamada-Kawai's limit
+    lines = ["model ladder", "param r = 1", "param c = 1", "unknown k = 2", "Se:v -> 1:s1"]
+    for i in range(1, stages + 1):
+        lines += [f"1:s{i} -> R:r{i}(r)", f"1:s{i} -> 0:n{i}", f"0:n{i} -> C:c{i}(c)"]
+        lines.append(f"0:n{i} -> 1:s{i + 1}" if i < stages else f"0:n{i} -> De:out")
+    graph = mtt.load("\n".join(lines) + "\n").bondgraph
+    assert graph.graph.number_of_nodes() > draw.KAMADA_KAWAI_NODES
+    position, again = draw.layout(graph), draw.layout(graph)
+    assert all(np.array_equal(position[name], again[name]) for name in position)
+    points = np.array(list(position.values()))
+    distances = np.linalg.norm(points[:, None] - points[None], axis=-1)
+    np.fill_diagonal(distances, np.inf)
+    assert distances.min() > 0.3 * draw.BOND_LENGTH
+
+
 def test_mtt_draw_writes_every_label_and_bond_number(tmp_path, capsys):
     out = tmp_path / "rlc.svg"
     status, stdout, _ = run(capsys, "draw", str(mtt.example("rlc")), "-o", str(out))

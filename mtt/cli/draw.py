@@ -1,12 +1,12 @@
 """A bond graph as a picture: component labels, bonds with half-arrows, causal strokes.
 
-The signals a modulated source reads (e(X), f(X): no power, no bond) are dashed full
-arrows from the component read to the source.
-
-The layout is networkx's (Kamada-Kawai: bonds of even length, few crossings); matplotlib
-draws it. Each bond runs between the boxes of its two labels, with the half-arrow at the
-head (the direction of positive power) and, once causality is assigned, the causal stroke
-across the end that receives the effort.
+The layout is networkx's (Kamada-Kawai: bonds of even length, few crossings; for large
+models, where Kamada-Kawai takes seconds, a spring layout started from the layers of
+distance to the input); matplotlib draws it.
+Each bond runs between the boxes of its two labels, with the half-arrow at the head (the
+direction of positive power) and, once causality is assigned, the causal stroke across
+the end that receives the effort. The signals a modulated source reads (e(X), f(X): no
+power, no bond) are dashed full arrows from the component read to the source.
 """
 
 from __future__ import annotations
@@ -30,16 +30,22 @@ from mtt.language.components import Role
 BOND_LENGTH = 1.0  # layout units between bonded labels
 TICK = 0.09  # half-arrow barb and causal stroke, in layout units
 GAP = 0.07  # between a label and the bonds that end at it
+KAMADA_KAWAI_NODES = 150  # above, Kamada-Kawai takes seconds (20 s at 400 components)
+MAX_INCHES = 60.0  # a side of the picture
 INK, NUMBER_INK, SIGNAL_INK = "#1a1a1a", "#7a7a7a", "#b04a1a"
 ROLE_INK = {Role.SOURCE: "#1f5fa8", Role.DETECTOR: "#1f5fa8", Role.JUNCTION: "#1a1a1a"}
 
 
 def layout(graph: BondGraph) -> dict[str, np.ndarray]:
-    """Positions of the components: Kamada-Kawai on the bonds, turned to lie wide."""
+    """Positions of the components: laid out on the bonds, turned to lie wide."""
     simple = nx.Graph(graph.graph.to_undirected())
     if simple.number_of_nodes() == 1:
         return {next(iter(simple)): np.zeros(2)}
-    position = nx.kamada_kawai_layout(simple)
+    if simple.number_of_nodes() <= KAMADA_KAWAI_NODES:
+        position = nx.kamada_kawai_layout(simple)
+    else:  # the layers of distance from the input, relaxed: long chains meander, unknotted
+        start = nx.bfs_layout(simple, start=graph.input) if nx.is_connected(simple) else None
+        position = nx.spring_layout(simple, pos=start, seed=0, iterations=50)
     points = np.array(list(position.values()))
     points -= points.mean(axis=0)
     # principal axes: the longest extent of the drawing runs left to right
@@ -98,7 +104,7 @@ def figure(graph: BondGraph, causal: CausalBondGraph | None = None) -> Figure:
     points = np.array(list(position.values()))
     low, high = points.min(axis=0) - 0.6, points.max(axis=0) + 0.6
     width, height = high - low
-    inches = 1.35  # per layout unit: room for labels such as "GY:km" at 10 pt
+    inches = min(1.35, MAX_INCHES / max(width, height))  # room for "GY:km" at 10 pt
     fig = Figure(figsize=(max(3.0, width * inches), max(2.0, height * inches)))
     canvas = FigureCanvasAgg(fig)
     ax = fig.add_axes((0, 0, 1, 1))
