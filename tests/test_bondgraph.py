@@ -396,3 +396,17 @@ def test_everything_file_builds_with_every_construct():
     assert len(graph.bonds) == 13
     assert graph.graph.number_of_nodes() == 14
     assert [(p.bond, p.inward) for p in graph.ports("g")] == [(4, True), (5, False)]
+
+
+def test_every_kind_the_compiler_reports_is_documented():
+    """docs/language.md has a row for each kind the language, derivation and estimator
+    stages can report (found in their source, so a new kind cannot go undocumented)."""
+    reported = {"no_input", "no_output"}  # chosen by role, not written out at the call
+    call = re.compile(r'(?:error|warning|report|_fail|fail)\(\s*(?:theta,\s*)?"([a-z_]+)"')
+    for stage in ("language", "derivation", "estimator"):
+        for path in (ROOT / "mtt" / stage).glob("*.py"):
+            reported |= set(call.findall(path.read_text(encoding="utf-8")))
+    documented = set(re.findall(r"^\| `([a-z_]+)` \|", (ROOT / "docs" / "language.md").read_text(),
+                                re.MULTILINE))  # fmt: skip
+    assert len(reported) >= 32
+    assert reported <= documented, reported - documented

@@ -3,7 +3,9 @@
 from __future__ import annotations
 
 import itertools
+import json
 import random
+import re
 from pathlib import Path
 
 import pytest
@@ -11,7 +13,8 @@ import sympy
 from oracle import oracle_tf
 
 from mtt.derivation.causality import CausalBondGraph, assign, describe
-from mtt.derivation.pipeline import load, transfer_for
+from mtt.derivation.pipeline import causal_for, load, transfer_for
+from mtt.derivation.structure import structure_problems
 from mtt.language.diagnostics import ModelError, Source
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -212,7 +215,8 @@ def test_single_bond_junction_is_fixed_first(models):
 
 def test_single_bond_junctions_do_not_cause_false_conflicts(tmp_path):
     # Found by comparing with the oracle on random graphs: 1:j3 and 0:j4 have a single
-    # bond each. The model has a unique solution (G = 0), with C:e2 and C:e4 dependent.
+    # bond each. The model has a unique solution (G = 0), with C:e2 and C:e4 dependent;
+    # that G = 0 is structural: no path leads from the input to the output.
     path = tmp_path / "dangling.bg"
     path.write_text(
         """model dangling
@@ -234,8 +238,10 @@ Se:u -> 1:j1
     c = causal(path)
     check_rules(c)
     assert c.dependent == ("e2", "e4")
-    tf = transfer_for(path)
-    assert tf.numerator == 0 and oracle_tf(path) == 0
+    assert oracle_tf(path) == 0
+    with pytest.raises(ModelError) as caught:
+        transfer_for(path)
+    assert caught.value.kinds() == ["unreachable_output"]
 
 
 def test_shorted_network_transfer_function(tmp_path):
@@ -323,3 +329,60 @@ def check_rules_structurally(c: CausalBondGraph) -> None:
             (component.type.name == "C") != (component.name in c.dependent)
         )
     check_rules(c)
+
+
+# --- structural problems: found from causality alone, before any algebra ---------------
+
+STRUCTURE = Path(__file__).resolve().parent / "data" / "structure"
+
+
+@pytest.mark.parametrize("path", sorted(STRUCTURE.glob("*.bg")), ids=lambda p: p.stem)
+def test_structural_problems_are_placed(path):
+    (expected,) = [
+        (kind, int(line), int(column))
+        for kind, line, column in re.findall(r"^# expect: (\w+) (\d+):(\d+)$",
+                                             path.read_text(), re.MULTILINE)
+    ]  # fmt: skip
+    with pytest.raises(ModelError) as caught:
+        causal_for(load(path), identify=True)
+    (problem,) = caught.value.errors
+    assert (problem.kind, problem.position.line, problem.position.column) == expected
+
+
+def test_the_structural_checks_pass_every_valid_model():
+    paths = [*ROOT.glob("models/*.bg"), *SYSTEMS.glob("*.bg"),
+             *(ROOT / "tests" / "data" / "subsystems").glob("*.bg")]  # fmt: skip
+    for path in paths:
+        graph = load(path)
+        assert structure_problems(assign(graph)) == [], path
+        if graph.unknowns:  # and each unknown is really in the transfer function
+            tf = transfer_for(path)
+            free = {str(x) for x in (tf.numerator / tf.denominator).free_symbols}
+            assert set(graph.unknowns) <= free, path
+
+
+def test_a_path_through_a_signal_reaches_the_output(tmp_path):
+    # the only link from the source to the detector is a modulated source's signal
+    path = tmp_path / "m.bg"
+    path.write_text("model m\nunknown g = 2\nSe:v -> 0:a -> R:r(1)\nMSf:m(g*e(a)) -> 0:b\n"
+                    "0:b -> R:load(1)\n0:b -> De:y\n")  # fmt: skip
+    assert structure_problems(assign(load(path))) == []
+    tf = transfer_for(path)
+    assert sympy.expand(tf.numerator - sympy.Symbol("g")) == 0 and tf.denominator == 1
+
+
+def test_the_deriving_commands_report_what_they_cannot_do(capsys):
+    from mtt.cli.main import main
+
+    # the transfer function to an unreachable output is zero: an error for every command
+    assert main(["tf", str(STRUCTURE / "island.bg")]) == 2
+    assert "error[unreachable_output]" in capsys.readouterr().err
+    # an unknown that drops out: the transfer function exists, Theta cannot identify it
+    assert main(["tf", str(STRUCTURE / "dropped.bg")]) == 0
+    assert "  G(s) = 1 / (c*s + 1)" in capsys.readouterr().out
+    assert main(["theta", str(STRUCTURE / "dropped.bg")]) == 2
+    assert "dropped.bg:6:9: error[no_dependence]: the unknown k" in capsys.readouterr().err
+    assert main(["check", "--json", str(STRUCTURE / "dropped.bg")]) == 2
+    record = json.loads(capsys.readouterr().out)
+    assert [(e["kind"], e["line"]) for e in record["errors"]] == [("no_dependence", 6)]
+    assert (record["input"], record["output"]) == ("Se:v", "De:y")

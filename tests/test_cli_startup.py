@@ -52,6 +52,6 @@ def test_the_parser_imports_no_heavy_library(argv):
 
 def test_check_imports_only_what_parsing_needs(tmp_path):
     model = tmp_path / "rc.bg"
-    model.write_text("model rc\nparam r = 1\nunknown c = 2\nSe:u -> 0:a\n0:a -> R:r\n"
-                     "0:a -> C:c\n0:a -> Df:y\n")  # fmt: skip
+    model.write_text("model rc\nparam r = 1\nunknown c = 2\nSe:u -> 1:s -> R:r\n1:s -> 0:a\n"
+                     "0:a -> C:c\n0:a -> De:y\n")  # fmt: skip
     assert _imported("check", str(model)) <= {"sympy", "networkx", "lark"}

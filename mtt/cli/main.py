@@ -49,7 +49,7 @@ def _summary(
 ) -> dict:
     """The `check --json` record of one file (its shape is a public contract)."""
     errors = problem.errors if problem else ()
-    warnings = problem.warnings if problem else (graph.warnings if graph else ())
+    warnings = (problem.warnings if problem else ()) + (graph.warnings if graph else ())
     record = {
         "file": file,
         "ok": problem is None,
@@ -80,16 +80,17 @@ def _summary(
 
 
 def _check_one(file: str, args) -> tuple[dict, ModelError | None, BondGraph | None]:
-    from mtt.derivation.pipeline import read_source
+    """Everything that can be told of a model before algebra: the language's rules, then
+    causality and the structure (can the input reach the output, the unknowns matter)."""
+    from mtt.derivation.pipeline import causal_for, read_source
     from mtt.language.bondgraph import build
     from mtt.language.parse import parse
 
     parsed = graph = problem = None
-    source = None
     try:
-        source = read_source(file)
-        parsed = parse(source)
+        parsed = parse(read_source(file))
         graph = build(parsed, selection_from_args(args))
+        causal_for(graph, identify=True)
     except ModelError as exc:
         problem = exc
     return _summary(file, parsed, graph, problem), problem, graph
@@ -104,13 +105,13 @@ def cmd_check(args) -> int:
         if args.json:
             _print_json(record)
             continue
+        for note in graph.warnings if graph else ():
+            print(note.render(), file=sys.stderr)
         if problem is not None:
             print(problem.render(), file=sys.stderr)
             count = len(problem.errors)
             print(f"{file}: {count} error{'s' * (count != 1)}", file=sys.stderr)
             continue
-        for note in graph.warnings:
-            print(graph.source.render(note), file=sys.stderr)
         unknowns = graph.unknowns
         unknown = f", unknown{'s' * (len(unknowns) > 1)} {', '.join(unknowns)}" if unknowns else ""
         print(
@@ -185,7 +186,7 @@ def _load(args) -> BondGraph:
 
     graph = load(args.file, selection_from_args(args))
     for note in graph.warnings:
-        print(graph.source.render(note), file=sys.stderr)
+        print(note.render(), file=sys.stderr)
     return graph
 
 
@@ -213,7 +214,9 @@ def cmd_causality(args) -> int:
     return EXIT_OK
 
 
-def _equations(args) -> Equations:
+def _equations(args, identify: bool = False) -> Equations:
+    """The equations of the model the arguments name; `identify`: check that its unknowns
+    can be identified (they reach the output)."""
     from mtt.derivation.pipeline import equations_for
 
     graph = _load(args)
@@ -224,7 +227,7 @@ def _equations(args) -> Equations:
                 "stays symbolic here (its value is the true value of simulations)",
                 file=sys.stderr,
             )
-    return equations_for(graph, choice_from_args(args))
+    return equations_for(graph, choice_from_args(args), identify)
 
 
 def cmd_ss(args) -> int:
@@ -245,7 +248,7 @@ def _derived(args, text, latex) -> int:
     from mtt.derivation.transfer import transfer_function
     from mtt.language.components import Role
 
-    equations = _equations(args)
+    equations = _equations(args, identify=args.command == "theta")
     theta = theta_matrix(transfer_function(equations))
     if args.command == "theta" and not theta.unknowns:
         raise ModelError(equations.causal.bondgraph.source, [NO_UNKNOWN])

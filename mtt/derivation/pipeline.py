@@ -4,9 +4,10 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from mtt.derivation.causality import assign
+from mtt.derivation.causality import CausalBondGraph, assign
 from mtt.derivation.equations import Equations, derive
 from mtt.derivation.parameters import ParameterChoice, parametrise
+from mtt.derivation.structure import structure_problems
 from mtt.derivation.theta import Theta, theta_matrix
 from mtt.derivation.transfer import TransferFunction, transfer_function
 from mtt.language.bondgraph import BondGraph, Selection, build
@@ -30,9 +31,22 @@ NO_UNKNOWN = error(
 )
 
 
-def equations_for(graph: BondGraph, choice: ParameterChoice = DEFAULT_CHOICE) -> Equations:
+def causal_for(graph: BondGraph, identify: bool = False) -> CausalBondGraph:
+    """Bond graph -> causal bond graph, free of structural problems: an output the input
+    does not reach; when the unknowns are to be identified (`identify`), an unknown that
+    cannot reach the output either."""
+    causal = assign(graph)
+    problems = [p for p in structure_problems(causal) if identify or p.kind == "unreachable_output"]
+    if problems:
+        raise ModelError(graph.source, problems)
+    return causal
+
+
+def equations_for(
+    graph: BondGraph, choice: ParameterChoice = DEFAULT_CHOICE, identify: bool = False
+) -> Equations:
     """Bond graph -> causal bond graph -> equations, with the parameters as chosen."""
-    return derive(assign(graph), parametrise(graph, choice))
+    return derive(causal_for(graph, identify), parametrise(graph, choice))
 
 
 def transfer_for(path: str | Path, choice: ParameterChoice = DEFAULT_CHOICE) -> TransferFunction:
@@ -42,7 +56,8 @@ def transfer_for(path: str | Path, choice: ParameterChoice = DEFAULT_CHOICE) -> 
 
 def theta_for(path: str | Path, choice: ParameterChoice = DEFAULT_CHOICE) -> Theta:
     """Text -> ... -> Theta: everything a generated estimator needs (so, an unknown)."""
-    theta = theta_matrix(transfer_for(path, choice))
+    graph = load(path, choice.selection)
+    theta = theta_matrix(transfer_function(equations_for(graph, choice, identify=True)))
     if not theta.unknowns:
         raise ModelError(read_source(path), [NO_UNKNOWN])
     return theta

@@ -1,0 +1,134 @@
+"""Structural problems of a causal bond graph, found before any algebra.
+
+Causality orders the equations: every variable a component imposes is computed from the
+variables it receives (and, for storage, from its state). Following those arrows from the
+input u gives every variable the input can influence, whatever the parameter values; if
+the output y is not among them, the transfer function is zero (`unreachable_output`). A
+component whose variables lie on no path from u to y cannot change the transfer
+function: an unknown that enters only such components drops out of it (`no_dependence`).
+Both are structural: they hold for every value of the parameters.
+"""
+
+from __future__ import annotations
+
+import networkx as nx
+
+from mtt.derivation.causality import CausalBondGraph
+from mtt.language.bondgraph import BondGraph, Component
+from mtt.language.components import Role
+from mtt.language.diagnostics import Diagnostic, error
+
+INPUT, OUTPUT = ("u",), ("y",)
+
+
+def _received(causal: CausalBondGraph, name: str) -> list[tuple]:
+    return [
+        ("f" if causal.imposes_effort(name, p.bond) else "e", p.bond)
+        for p in causal.bondgraph.ports(name)
+    ]
+
+
+def _imposed(causal: CausalBondGraph, name: str) -> list[tuple]:
+    return [
+        ("e" if causal.imposes_effort(name, p.bond) else "f", p.bond)
+        for p in causal.bondgraph.ports(name)
+    ]
+
+
+def _arrows(causal: CausalBondGraph, component: Component) -> list[tuple[tuple, tuple]]:
+    """What a component's imposed variables (and its output y, its state) are computed
+    from, as arrows (from, to). Junctions and transformers relate efforts to efforts and
+    flows to flows; gyrators efforts to flows; a source's variable comes from the input
+    (or its signals, or nothing: a source set to zero), a detector's from nothing."""
+    graph, name, role = causal.bondgraph, component.name, component.type.role
+    imposed, received = _imposed(causal, name), _received(causal, name)
+    if role is Role.SOURCE:
+        sources = [INPUT] if name == graph.input else []
+    elif role is Role.MODULATED:
+        sources = [(use.kind, graph.reading(use.target)) for use in component.argument.signals]
+    elif role is Role.DETECTOR:  # imposes a zero; the output reads the other variable
+        return [(v, OUTPUT) for v in received] if name == graph.output else []
+    elif role is Role.STORAGE:  # the state and its rate, both ways (integral or derivative)
+        state = [("x", name), ("dx", name)]
+        return [(a, b) for a in received + state for b in imposed + state if a != b]
+    elif role is Role.JUNCTION or component.type.name == "TF":
+        return [(a, b) for a in received for b in imposed if a[0] == b[0]]
+    elif component.type.name == "GY":
+        return [(a, b) for a in received for b in imposed if a[0] != b[0]]
+    else:  # a resistor: its effort and flow
+        sources = received
+    return [(a, b) for a in sources for b in imposed]
+
+
+def signal_flow(causal: CausalBondGraph) -> nx.DiGraph:
+    """Variables as nodes, an arrow from each variable to those computed from it."""
+    flow = nx.DiGraph()
+    flow.add_nodes_from([INPUT, OUTPUT])
+    for component in causal.bondgraph.components:
+        flow.add_nodes_from(_imposed(causal, component.name))
+        flow.add_edges_from(_arrows(causal, component))
+    return flow
+
+
+def _unknowns_in(graph: BondGraph) -> dict[str, set[str]]:
+    """The unknowns each parameter's value brings in, through the parameters it names
+    (an unknown's own value is its true value: it brings in itself only)."""
+    unknowns = set(graph.unknowns)
+    found: dict[str, set[str]] = {}
+
+    def of(name: str, seen: frozenset = frozenset()) -> set[str]:
+        if name in unknowns:
+            return {name}
+        if name not in found:
+            value = graph.parameters[name].value
+            names = {s.name for s in value.value.free_symbols} if value is not None else set()
+            found[name] = {
+                u for n in names if n in graph.parameters and n not in seen
+                for u in of(n, seen | {name})
+            }  # fmt: skip
+        return found[name]
+
+    return {name: of(name) for name in graph.parameters}
+
+
+def _entering(graph: BondGraph, component: Component, brought: dict) -> set[str]:
+    if component.argument is None:
+        return set()
+    symbols = component.argument.value.free_symbols
+    return {u for s in symbols if s.name in brought for u in brought[s.name]}
+
+
+def structure_problems(causal: CausalBondGraph) -> list[Diagnostic]:
+    """An output the input cannot reach, and unknowns that cannot reach the output."""
+    graph = causal.bondgraph
+    flow = signal_flow(causal)
+    reached = nx.descendants(flow, INPUT)
+    output = graph.component(graph.output)
+    source = graph.component(graph.input)
+    if OUTPUT not in reached:
+        return [
+            error(
+                "unreachable_output",
+                f"the output {output.label} does not depend on the input {source.label}: "
+                "no chain of bonds and signals leads from one to the other, whatever the "
+                "parameters (the transfer function is zero)",
+                output.position,
+            )
+        ]
+    on_path = reached & (nx.ancestors(flow, OUTPUT) | {OUTPUT})
+    brought = _unknowns_in(graph)
+    entering: set[str] = set()
+    for component in graph.components:
+        if on_path & {target for _, target in _arrows(causal, component)}:
+            entering |= _entering(graph, component, brought)
+    return [
+        error(
+            "no_dependence",
+            f"the unknown {name} does not enter the transfer function from "
+            f"{source.label} to {output.label}: no component between them depends on it, "
+            "so the data cannot tell its value",
+            graph.parameters[name].position,
+        )
+        for name in graph.unknowns
+        if name not in entering
+    ]
