@@ -187,7 +187,8 @@ def test_a_theta_that_is_not_polynomial_in_the_kept_parameters_is_refused():
 
 def test_reserved_names_cover_the_generated_functions_arguments():
     module = codegen.load(dc_drive_theta())
-    for function in (module.estimate, module.simulate, module.transfer_function):
+    functions = (module.estimate, module.fit, module.Tracker.__init__, module.simulate)
+    for function in (*functions, module.transfer_function, module.theta):
         names = set(inspect.signature(function).parameters) - {"known"}
         assert names <= codegen.RESERVED, names - codegen.RESERVED
 

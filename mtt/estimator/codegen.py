@@ -35,7 +35,7 @@ from mtt.resources import resource_dir
 # argument (`estimate(..., tau=2)`), must not take one of them.
 RESERVED = frozenset(
     {"t", "u", "y", "k", "k0", "beta", "S0", "C", "hold", "method", "rtol", "atol"}
-    | {"max_step", "progress", "known"}
+    | {"max_step", "progress", "engine", "bounds", "self", "known"}
 )
 # Characters that sympy's printing of an exact number may use; text made only of them
 # cannot end a docstring or a string literal.
