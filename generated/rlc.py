@@ -851,7 +851,7 @@ class _Run:
             v = rows[l]
             return before + weight * np.einsum("d,pde,e->p", v, setup.partial(h, tau), v)
 
-        khat, taylor = self._follow(E, times, partial) if self.ok else (np.empty(0), E[:0])
+        khat, taylor = self._follow(E, times, quiet, partial) if self.ok else (np.empty(0), E[:0])
         self.z, self.t, self.u, self.y = rows[-1, :width], times[-1], us[-1], ys[-1]
         scale = np.abs(E[-1]).max()
         self.P, self.log_scale = E[-1] / scale, log_scale[-1] + math.log(scale)
@@ -860,8 +860,9 @@ class _Run:
         self.taylor = _taylor(self.P, self.khat)
         return t[: khat.size], khat, taylor, log_scale[: khat.size]
 
-    def _follow(self, E: np.ndarray, times: np.ndarray, partial):
-        """k^ and the Taylor rows of J about it at each new sample, up to a fold."""
+    def _follow(self, E: np.ndarray, times: np.ndarray, quiet: np.ndarray, partial):
+        """k^ and the Taylor rows of J about it at each new sample, up to a fold; after a
+        quiet interval (no information), k^ is the one before it."""
         count = E.shape[0]
         khat, taylor = np.empty(count), np.empty_like(E)
         k, before = self.khat, self.taylor
@@ -869,6 +870,10 @@ class _Run:
         while i < count:
             j = min(count, i + window)
             candidate, converged = _newton(E[i:j], k)  # all from k: one vectorised solve
+            if quiet[i:j].any():  # no information, no update
+                last = np.maximum.accumulate(np.where(quiet[i:j], -1, np.arange(j - i)))
+                candidate = np.where(last < 0, k, candidate[last])
+                converged = (last < 0) | converged[last]
             previous = np.concatenate([[k], candidate[:-1]])
             reach = np.abs(candidate - previous)
             own = _taylor(E[i:j], candidate)

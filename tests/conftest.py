@@ -14,6 +14,8 @@ from mtt.language.bondgraph import BondGraph, Selection, build
 from mtt.language.diagnostics import ModelError, Source
 from mtt.language.parse import ParsedModel, parse
 
+pytest_plugins = ["estimators"]  # the generated modules and their paper data, as fixtures
+
 ROOT = Path(__file__).resolve().parent.parent
 DATA = Path(__file__).resolve().parent / "data"
 MODELS = sorted((ROOT / "models").glob("*.bg"))

@@ -17,6 +17,7 @@ DC_DRIVE = str(ROOT / "models" / "dc_drive.bg")
 ABSORBER = [str(ROOT / "models" / "absorber.bg"), "--keep", "tau,l"]
 PAPER = ["--beta", "0.1", "--S0", "1e-4"]
 ABSORBER_DATA = [*ABSORBER, "--t-end", "4", "--noise-uniform", "0.02", *PAPER]
+RUN_KEYS = ["global_k", "global_cost", "ok", "stopped_at", "informed_until"]
 
 
 def mtt(capsys, *args: str) -> tuple[int, str, str]:
@@ -79,9 +80,11 @@ def test_dc_drive_fig2_numbers(capsys):
     assert list(result) == ["model", "unknown", "runs"]
     assert (result["model"], result["unknown"]) == ("dc_drive", "k")
     for run, k0 in zip(result["runs"], (0.0, 5.0, 20.0), strict=True):
-        assert list(run) == ["k0", "filter", "k", "minima"]
+        assert list(run) == ["k0", "filter", "k", "minima", *RUN_KEYS]  # issue 8 added RUN_KEYS
         assert run["k0"] == k0 and run["filter"] == "(1+s)^5"
         assert abs(run["k"] - 10.0) < 0.1 and run["minima"] == [run["k"]]
+        assert run["global_k"] == pytest.approx(run["k"], rel=1e-9) and run["ok"]
+        assert abs(run["global_cost"]) < 1e-12 and run["stopped_at"] is None
 
 
 def test_absorber_figs6_and_8_numbers(capsys):
@@ -201,3 +204,42 @@ def test_user_errors_exit_2_with_a_message(args, message, tmp_path, monkeypatch,
     assert status == 2
     assert message in err
     assert "Traceback" not in err
+
+
+def test_a_local_minimum_that_is_not_the_global_one_is_a_warning(capsys):
+    """Absorber from k0 = 0: the paper's estimate ends at the spurious minimum."""
+    status, out, err = mtt(capsys, "estimate", *ABSORBER_DATA, "--k0", "0", "1", "--json")
+    assert status == 0
+    runs = json.loads(out)["runs"]
+    assert runs[0]["k"] == pytest.approx(-0.233, abs=1e-3) and runs[0]["ok"]
+    assert runs[0]["global_k"] == pytest.approx(0.724, abs=1e-3) and runs[0]["global_cost"] < 0
+    assert runs[1]["global_k"] == pytest.approx(runs[1]["k"], rel=1e-9)
+    assert err.count("warning") == 1
+    assert (
+        "warning: k0 = 0, C(s) = (1 + s)^4: the estimate k = -0.233125 is a local minimum of "
+        "J at t = 4, with J(-0.233125) - J(0.724187) = " in err
+    )
+    assert err.rstrip().endswith("the global minimum is at k = 0.724187")
+    status, out, _ = mtt(capsys, "estimate", *ABSORBER_DATA, "--k0", "0")
+    assert "0.724187 (not the estimate)" in out.splitlines()[-1]
+
+
+def test_a_settled_record_leaves_the_estimate_where_the_data_put_it(capsys):
+    """A step held for 1000 s: after the response settles the data are rounding noise."""
+    status, out, err = mtt(capsys, "estimate", DC_DRIVE, "--t-end", "1000", "--k0", "5", "--json")
+    assert status == 0
+    (run,) = json.loads(out)["runs"]
+    assert abs(run["k"] - 10.0) < 1e-4 and run["ok"] and 100 < run["informed_until"] < 500
+    assert "note: k0 = 5, C(s) = (1 + s)^5: the data stopped informing the estimate at t = " in err
+
+
+def test_engines_and_bounds_from_the_command_line(capsys):
+    moments = estimates(capsys, *ABSORBER_DATA, "--k0", "0.5", "1")
+    ode = estimates(capsys, *ABSORBER_DATA, "--k0", "0.5", "1", "--engine", "ode", "--rtol", "1e-8")
+    for a, b in zip(moments["runs"], ode["runs"], strict=True):
+        assert a["k"] == pytest.approx(b["k"], rel=1e-5)
+        assert a["global_k"] == pytest.approx(b["global_k"], rel=1e-5)
+    bounded = estimates(capsys, *ABSORBER_DATA, "--k0", "1", "--bounds", "-1", "0")
+    assert bounded["runs"][0]["global_k"] == pytest.approx(-0.232, abs=1e-3)
+    status, _, err = mtt(capsys, "estimate", *ABSORBER_DATA, "--k0", "1", "--bounds", "1", "0")
+    assert status == 2 and "bounds must be (lo, hi) with lo < hi, not (1.0, 0.0)" in err

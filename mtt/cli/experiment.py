@@ -123,7 +123,8 @@ def _filters(module: ModuleType, args) -> list[tuple[str, object]]:
 def run_all(module: ModuleType, data: Data, args) -> list[Run]:
     """One estimate per filter and starting value, with a progress bar on a terminal."""
     filters = _filters(module, args)
-    options = dict(beta=args.beta, S0=args.S0, hold=args.hold, rtol=args.rtol, atol=args.atol)
+    options = dict(beta=args.beta, S0=args.S0, hold=args.hold, engine=args.engine,
+                   bounds=args.bounds, rtol=args.rtol, atol=args.atol)  # fmt: skip
     span = float(data.t[-1] - data.t[0])
     runs = []
     with tqdm(
@@ -145,11 +146,6 @@ def run_all(module: ModuleType, data: Data, args) -> list[Run]:
                 bar.update(start + span - bar.n)
                 runs.append(Run(k0, label, result))
     return runs
-
-
-def _normalised_cost(result) -> Callable:
-    """(J(k) - J(k^)) / J_2(k^): independent of the scale of C(s), and (k - k^)^2 / 2 near k^."""
-    return lambda k: result.cost(k) / result.J[0, -1]
 
 
 def _labels(runs: list[Run]) -> list[str]:
@@ -252,7 +248,7 @@ def cmd_estimate(args) -> int:
     labels = _labels(runs)
     curves = [
         plots.Curve(label, run.result.t, run.result.khat, run.result.minima(),
-                    _normalised_cost(run.result))
+                    run.result.normalised_cost, run.result.global_k)
         for label, run in zip(labels, runs, strict=True)
     ]  # fmt: skip
     title = f"{module.MODEL}: {data.note}"
@@ -278,17 +274,36 @@ def cmd_estimate(args) -> int:
     if args.csv:
         _write_trajectories(args.csv, runs, module.N)
     for run in runs:
-        if not run.result.ok:
-            print(
-                f"mtt estimate: warning: k0 = {run.k0:g}, C(s) = {run.filter}: "
-                f"{run.result.message}",
-                file=sys.stderr,
-            )
+        for kind, text in _notes(module, data, run):
+            print(f"mtt estimate: {kind}: k0 = {run.k0:g}, C(s) = {run.filter}: {text}",
+                  file=sys.stderr)  # fmt: skip
     if args.json:
         print(json.dumps(_record(module, runs)))
     else:
         print(_table(module, data, runs))
     return EXIT_OK if all(run.result.ok for run in runs) else EXIT_STOPPED
+
+
+def _notes(module: ModuleType, data: Data, run: Run) -> list[tuple[str, str]]:
+    """What a run's table cannot say: it stopped, it is not at the global minimum, or the
+    data stopped informing it."""
+    result, name = run.result, module.UNKNOWN
+    notes = [] if result.ok else [("warning", result.message)]
+    if not result.at_global:
+        best = float(result.global_k[-1])
+        notes.append((
+            "warning",
+            f"the estimate {name} = {result.k:.6g} is a local minimum of J at t = "
+            f"{result.t[-1]:g}, with J({result.k:.6g}) - J({best:.6g}) = "
+            f"{-float(result.cost(best)):.3g}: the global minimum is at {name} = {best:.6g}",
+        ))  # fmt: skip
+    if result.informed_until is not None:
+        notes.append((
+            "note",
+            f"the data stopped informing the estimate at t = {result.informed_until:.6g}: "
+            "after that they are rounding noise, which leaves it unchanged",
+        ))  # fmt: skip
+    return notes
 
 
 def _record(module: ModuleType, runs: list[Run]) -> dict:
@@ -302,24 +317,47 @@ def _record(module: ModuleType, runs: list[Run]) -> dict:
                 "filter": run.filter,
                 "k": run.result.k,
                 "minima": [float(value) for value in run.result.minima()],
+                "global_k": _number(run.result.global_k[-1]),
+                "global_cost": _number(run.result.cost(run.result.global_k[-1])),
+                "ok": run.result.ok,
+                "stopped_at": run.result.stopped_at,
+                "informed_until": run.result.informed_until,
             }
             for run in runs
         ],
     }
 
 
+def _number(value) -> float | None:
+    """A float for JSON; None where there is none (J without a global minimiser)."""
+    value = float(value)
+    return value if np.isfinite(value) else None
+
+
 def _table(module: ModuleType, data: Data, runs: list[Run]) -> str:
-    rows = [("k0", "C(s)", f"{module.UNKNOWN} at t = {data.t[-1]:g}", "local minima of J")]
+    """The final estimates and local minima, then the global minimum of each run's cost."""
+    end = f"t = {data.t[-1]:g}"
+    estimates = [("k0", "C(s)", f"{module.UNKNOWN} at {end}", "local minima of J")]
+    globals_ = [("k0", "C(s)", f"global minimum of J at {end}", "J(global) - J(estimate)")]
     for run in runs:
-        minima = ", ".join(f"{value:.6g}" for value in run.result.minima())
-        final = f"{run.result.k:.6g}" + ("" if run.result.ok else " (stopped)")
-        rows.append((f"{run.k0:g}", run.filter, final, minima))
+        result = run.result
+        minima = ", ".join(f"{value:.6g}" for value in result.minima())
+        final = f"{result.k:.6g}" + ("" if result.ok else " (stopped)")
+        estimates.append((f"{run.k0:g}", run.filter, final, minima))
+        best = float(result.global_k[-1])
+        where = f"{best:.6g}" + ("" if result.at_global else " (not the estimate)")
+        globals_.append((f"{run.k0:g}", run.filter, where, f"{float(result.cost(best)):.3g}"))
+    return "\n".join([f"{module.MODEL}: {data.note}", *_rows(estimates), "", *_rows(globals_)])
+
+
+def _rows(rows: list[tuple[str, ...]]) -> list[str]:
     widths = [max(len(row[i]) for row in rows) for i in range(len(rows[0]))]
-    lines = [f"{module.MODEL}: {data.note}"]
-    for row in rows:
-        cells = (cell.ljust(width) for cell, width in zip(row, widths, strict=True))
-        lines.append(("  " + "  ".join(cells)).rstrip())
-    return "\n".join(lines)
+    return [
+        (
+            "  " + "  ".join(cell.ljust(width) for cell, width in zip(row, widths, strict=True))
+        ).rstrip()
+        for row in rows
+    ]
 
 
 def _write_trajectories(path: str, runs: list[Run], N: int) -> None:

@@ -90,8 +90,9 @@ def register(commands) -> None:
         "estimate",
         help="identify the unknown from data (measured or simulated)",
         description="Run the generated estimator once per starting value and filter; print "
-        "the final estimates and the local minima of the cost. Exit status 1 if a run "
-        "stopped early (the estimate left the region where the cost is convex).",
+        "the final estimates, the local minima of the cost and its global minimum (a warning "
+        "says when the estimate is not there). Exit status 1 if a run stopped early (the "
+        "estimate left the region where the cost is convex).",
     )
     estimate.add_argument("file", metavar="FILE")
     add_parameter_options(estimate)
@@ -111,8 +112,21 @@ def register(commands) -> None:
     group.add_argument(
         "--filter-T", type=float, nargs="+", metavar="T", help="filter(s) (1 + sT)^(n+1)"
     )
-    group.add_argument("--rtol", type=float, default=1e-6, help="solver relative tolerance")
-    group.add_argument("--atol", type=float, default=1e-9, help="solver absolute tolerance")
+    group.add_argument(
+        "--engine",
+        choices=("moments", "ode"),
+        default="moments",
+        help="moments: exact, at every sample (default); ode: the paper's integration",
+    )
+    group.add_argument(
+        "--bounds",
+        type=float,
+        nargs=2,
+        metavar=("LO", "HI"),
+        help="look for the global minimum of J within [LO, HI] (default: everywhere)",
+    )
+    group.add_argument("--rtol", type=float, default=1e-6, help="the ODE's relative tolerance")
+    group.add_argument("--atol", type=float, default=1e-9, help="the ODE's absolute tolerance")
     outputs = estimate.add_argument_group("outputs")
     outputs.add_argument("--plot", metavar="FILE.png", help="plot the estimates against time")
     outputs.add_argument("--cost-plot", metavar="FILE.png", help="plot the cost at the end")

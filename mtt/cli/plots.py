@@ -35,6 +35,7 @@ class Curve:
     khat: np.ndarray
     minima: np.ndarray  # local minima of the cost at the last time
     normalised_cost: object  # k -> (J(k) - J(k^)) / J_2(k^) at the last time
+    global_k: np.ndarray  # the global minimiser of the cost at each time
 
 
 def _figure(heights: tuple[int, ...] = (1,)) -> tuple[Figure, list]:
@@ -62,10 +63,17 @@ def estimates(
     unknown: str,
     true_value: float | None,
 ) -> None:
-    """The estimate against time, one line per run (the paper's Figs. 2, 6 and 7)."""
+    """The estimate against time, one line per run (the paper's Figs. 2, 6 and 7), and,
+    dotted where it differs from the estimate, the global minimiser of the cost."""
     figure, (ax,) = _figure()
     for curve in curves:
-        ax.plot(curve.t, curve.khat, label=curve.label, linewidth=1.4)
+        (line,) = ax.plot(curve.t, curve.khat, label=curve.label, linewidth=1.4)
+        apart = np.abs(curve.global_k - curve.khat) > 1e-6 * (np.abs(curve.khat) + 1e-300)
+        if apart.any():
+            ax.plot(curve.t, np.where(apart, curve.global_k, np.nan), ":", linewidth=1.0,
+                    color=line.get_color())  # fmt: skip
+    if any((np.abs(c.global_k - c.khat) > 1e-6 * np.abs(c.khat)).any() for c in curves):
+        ax.plot([], [], ":", color="gray", label="global minimum of J")
     if true_value is not None:
         ax.axhline(true_value, color="black", linestyle="--", linewidth=0.9,
                    label=f"true value {unknown} = {true_value:g}")  # fmt: skip
