@@ -55,7 +55,7 @@ import json
 import math
 import sys
 from bisect import bisect_left, bisect_right
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 from scipy import integrate, linalg, optimize, signal
@@ -94,9 +94,13 @@ def theta(**known: float) -> np.ndarray:
 # Everything below is the same in every generated module: only `theta` above is the system's.
 
 HOLDS = ("linear", "zoh")  # input interpolation between samples
+ENGINES = ("moments", "ode")  # exact moments (default) or the paper's ODE
 METHODS = ("RK23", "RK45", "DOP853")  # scipy's adaptive explicit Runge-Kutta solvers
 FACTORIALS = [math.factorial(i) for i in range(2 * N + 1)]
 HALF_FACTORIALS = [0.5 * factorial for factorial in FACTORIALS]
+
+
+# Checks: every argument is validated before use; a bad one is a ValueError that names it.
 
 
 def _real(name: str, value) -> float:
@@ -120,6 +124,19 @@ def _choice(name: str, value: str, choices: tuple[str, ...]) -> str:
     if value not in choices:
         raise ValueError(f"{name} must be one of {', '.join(map(repr, choices))}, not {value!r}")
     return value
+
+
+def _bounds(bounds) -> tuple[float, float]:
+    """(lo, hi) with lo < hi, each finite or infinite; None is the whole real line."""
+    if bounds is None:
+        return -math.inf, math.inf
+    try:
+        lo, hi = (float(value) for value in bounds)
+    except (TypeError, ValueError):
+        raise ValueError(f"bounds must be a pair (lo, hi) of numbers, not {bounds!r}") from None
+    if math.isnan(lo) or math.isnan(hi) or not lo < hi:
+        raise ValueError(f"bounds must be (lo, hi) with lo < hi, not ({lo}, {hi})")
+    return lo, hi
 
 
 def _known_values(known: dict) -> dict[str, float]:
@@ -149,16 +166,21 @@ def _array(name: str, value) -> np.ndarray:
         array = np.asarray(value, dtype=float)
     except (TypeError, ValueError):
         raise ValueError(f"{name} must be an array of real numbers") from None
+    if array.ndim == 0:
+        array = array.reshape(1)
     if array.ndim != 1:
         raise ValueError(f"{name} must be one-dimensional, not of shape {array.shape}")
-    bad = np.flatnonzero(~np.isfinite(array))
-    if bad.size:
-        raise ValueError(f"{name}[{bad[0]}] is {array[bad[0]]}: every value must be finite")
+    if not np.isfinite(array).all():
+        bad = np.flatnonzero(~np.isfinite(array))[0]
+        raise ValueError(f"{name}[{bad}] is {array[bad]}: every value must be finite")
     return array
 
 
-def _signals(*named: tuple[str, object], minimum: int) -> list[np.ndarray]:
-    """Sample times (the first) and signals, checked: finite, same length, t increasing."""
+def _signals(*named: tuple[str, object], minimum: int, after: float = -math.inf) -> list:
+    """Sample times (the first) and signals, checked: finite, same length, t increasing.
+
+    `after` is the time of a sample already seen (a Tracker's last): t must follow it.
+    """
     arrays = [_array(name, value) for name, value in named]
     lengths = [array.size for array in arrays]
     if len(set(lengths)) > 1:
@@ -167,13 +189,19 @@ def _signals(*named: tuple[str, object], minimum: int) -> list[np.ndarray]:
     if lengths[0] < minimum:
         raise ValueError(f"need at least {minimum} samples, not {lengths[0]}")
     t = arrays[0]
-    back = np.flatnonzero(np.diff(t) <= 0)
-    if back.size:
-        i = back[0]
+    if t.size and not t[0] > after:
+        raise ValueError(
+            f"t must be strictly increasing: t[0] = {t[0]} follows the last sample's t = {after}"
+        )
+    if not (t[1:] > t[:-1]).all():
+        i = np.flatnonzero(t[1:] <= t[:-1])[0]
         raise ValueError(
             f"t must be strictly increasing: t[{i + 1}] = {t[i + 1]} follows t[{i}] = {t[i]}"
         )
     return arrays
+
+
+# The system and its filtered signals ---------------------------------------------------------
 
 
 def transfer_function(k: float, **known: float) -> tuple[np.ndarray, np.ndarray]:
@@ -187,42 +215,67 @@ def transfer_function(k: float, **known: float) -> tuple[np.ndarray, np.ndarray]
     return (num if num.size else np.zeros(1)), den
 
 
-def _discretise(a: np.ndarray, b: np.ndarray, step: float, hold: str):
-    """x(t + step) = phi x(t) + before u(t) + after u(t + step), exact for the hold.
-
-    The input and its slope over the interval join the state of one matrix exponential.
-    """
-    order = a.shape[0]
-    block = np.zeros((order + 2, order + 2))
-    block[:order, :order] = a * step
-    block[:order, order] = b[:, 0] * step
-    block[order, order + 1] = 1.0  # d(input)/d(time / step) = u(t + step) - u(t)
-    e = linalg.expm(block)
-    phi, held, slope = e[:order, :order], e[:order, order], e[:order, order + 1]
-    if hold == "zoh":
-        return phi, held, np.zeros(order)
-    return phi, held - slope, slope
+def _responses(A, B, t: np.ndarray, w: np.ndarray, hold: str) -> np.ndarray:
+    """States (len(t), order) of x' = A x + B w from rest, w interpolated per the hold."""
+    steps = _Steps.of(t) if t.size > 1 else _Steps(np.ones(1), None)
+    if steps.index is None:
+        Phi, Gamma = _transitions(A, B, steps.values, hold)
+    states = np.empty((t.size, A.shape[0]))
+    states[0] = 0.0
+    ends = np.column_stack([w[:-1], w[1:]])[None]
+    chunk = BLOCK if steps.index is None else 2048
+    for lo in range(0, t.size - 1, chunk):
+        hi = min(t.size, lo + chunk + 1)
+        index = None
+        if steps.index is not None:  # the maps of this chunk's steps only
+            which, index = np.unique(steps.index[lo : hi - 1], return_inverse=True)
+            Phi, Gamma = _transitions(A, B, steps.values[which], hold)
+        _propagate(Phi, Gamma[:, None], ends[:, lo : hi - 1], states[lo : lo + 1], index,
+                   out=states[None, lo:hi])  # fmt: skip
+    return states
 
 
 def simulate(t, u, k: float, *, hold: str = "linear", **known: float) -> np.ndarray:
     """The output at times t for input samples u, from rest: exact for the stated hold.
 
     Between samples the input is interpolated linearly (hold="linear") or held
-    (hold="zoh"); the response to that input is computed by matrix exponentials.
+    (hold="zoh"); the response to that input is computed by matrix exponentials, once per
+    distinct sampling interval, and propagated in blocks (see `_propagate`).
     """
     t, u = _signals(("t", t), ("u", u), minimum=1)
     _choice("hold", hold, HOLDS)
     a, b, c, d = signal.tf2ss(*transfer_function(k, **known))
-    steps = np.diff(t)
-    uniform = steps.size > 0 and np.ptp(steps) <= 1e-9 * steps.max()
-    states = np.zeros((t.size, a.shape[0]))
-    matrices = None
-    for i, step in enumerate(steps):
-        if matrices is None or not uniform:
-            matrices = _discretise(a, b, step, hold)
-        phi, before, after = matrices
-        states[i + 1] = phi @ states[i] + before * u[i] + after * u[i + 1]
-    return states @ c[0] + d[0, 0] * u
+    if a.shape[0] == 0:  # a static gain
+        return d[0, 0] * u
+    return _responses(a, b[:, 0], t, u, hold) @ c[0] + d[0, 0] * u
+
+
+def filter_states(t, w, *, C=None, hold: str = "linear") -> np.ndarray:
+    """The state-variable filter's states s^i w / C(s), i = 0..deg C - 1, at the times t.
+
+    Exact for the hold (w interpolated linearly, or held for hold="zoh"), from rest at
+    t[0]: the filtered signals the estimator is built from (X takes the first n+1 of y's
+    and the first m+1 of u's). Shape (len(t), deg C).
+    """
+    t, w = _signals(("t", t), ("w", w), minimum=1)
+    _choice("hold", hold, HOLDS)
+    A, B = _realisation(filter_polynomial(C))
+    return _responses(A, B, t, w, hold)
+
+
+# The moments layer: the state-variable filter, exact over every sample interval -------------
+#
+# Between samples the output is interpolated linearly and the input linearly or held, so over
+# the interval [t_i, t_i + h] each signal is w(tau) = a + b tau with (a, b) fixed by w_i and
+# w_(i+1). The filter state of each signal and the pair (a, b) form one linear system
+# x' = F x, so matrix exponentials give, exactly for the hold: the filter state at t_i + h
+# (z_(i+1) = Phi z_i + Gamma [w_i, w_(i+1)]), and any weighted integral of a quadratic form of
+# the filtered signals X over the interval as a quadratic form of the interval's vector
+#     v_i = [z_y,i; z_u,i; y_i; y_(i+1); u_i; u_(i+1)]
+# (Van Loan's block exponential). Nothing in this layer depends on Theta.
+
+TIME_RESOLUTION = 8 * np.finfo(float).eps  # relative precision of a time stamp
+BLOCK = 1 << 15  # samples per chunk of work: bounds the memory of long records
 
 
 def filter_polynomial(C=None) -> np.ndarray:
@@ -251,6 +304,804 @@ def filter_polynomial(C=None) -> np.ndarray:
             "(every root must have a negative real part)"
         )
     return c
+
+
+def _realisation(c: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """A, B of the controllable canonical realisation of 1/C(s): state i is s^i w / C."""
+    order = c.size - 1
+    A = np.eye(order, k=1)
+    A[-1] = -c[:0:-1] / c[0]
+    B = np.zeros(order)
+    B[-1] = 1.0 / c[0]
+    return A, B
+
+
+def _memory(c: np.ndarray) -> float:
+    """The filter's slowest time constant: how long its state remembers (and its rounding)."""
+    return 1.0 / np.abs(np.roots(c).real).min()
+
+
+@dataclass(frozen=True)
+class _Steps:
+    """The distinct sampling intervals of a record, and which one each interval has.
+
+    Intervals that differ by less than the resolution of the time stamps are one: their
+    difference is rounding, not sampling. `index` is None when there is one step.
+    """
+
+    values: np.ndarray
+    index: np.ndarray | None
+
+    @staticmethod
+    def of(t: np.ndarray) -> "_Steps":
+        steps = np.diff(t)
+        resolution = TIME_RESOLUTION * max(abs(t[0]), abs(t[-1]))
+        if steps.max() - steps.min() <= resolution:
+            return _Steps(np.array([steps.mean()]), None)
+        order = np.argsort(steps, kind="stable")
+        ordered = steps[order]
+        new = np.r_[True, np.diff(ordered) > resolution]
+        group = np.cumsum(new) - 1
+        index = np.empty(steps.size, dtype=np.intp)
+        index[order] = group
+        values = np.bincount(group, weights=ordered) / np.bincount(group)
+        return _Steps(values, index)
+
+    def at(self, array: np.ndarray) -> np.ndarray:
+        """array[k] for each interval's step k (array has one entry per distinct step)."""
+        return array if self.index is None else array[self.index]
+
+
+def _drift(A: np.ndarray, B: np.ndarray) -> np.ndarray:
+    """F of the state [z; a; b] of one filtered signal w(tau) = a + b tau (a' = b, b' = 0)."""
+    order = A.shape[0]
+    F = np.zeros((order + 2, order + 2))
+    F[:order, :order] = A
+    F[:order, order] = B
+    F[order, order + 1] = 1.0
+    return F
+
+
+def _interpolation(h: np.ndarray, hold: str) -> np.ndarray:
+    """(a, b) = H (w_i, w_(i+1)) for each step h: w(tau) = a + b tau over the interval."""
+    H = np.zeros((h.size, 2, 2))
+    H[:, 0, 0] = 1.0
+    if hold == "linear":
+        H[:, 1, 0], H[:, 1, 1] = -1.0 / h, 1.0 / h
+    return H
+
+
+def _transitions(A, B, steps: np.ndarray, hold: str) -> tuple[np.ndarray, np.ndarray]:
+    """Phi (k, s, s) and Gamma (k, 2, s) for each step, exact for the hold: over one
+    interval, z_(i+1) = Phi z_i + Gamma^T [w_i, w_(i+1)]."""
+    order = A.shape[0]
+    E = linalg.expm(_drift(A, B) * steps[:, None, None])
+    Gamma = E[:, :order, order:] @ _interpolation(steps, hold)
+    return E[:, :order, :order], np.swapaxes(Gamma, 1, 2)
+
+
+def _interval_maps(A, B, steps, beta: float, hold: str, forms: np.ndarray, span=None):
+    """Phi, Gamma and W for each step h: the filters of y and u over one interval, and the
+    weighted integrals of the quadratic forms Q of X over its first `span` (default h).
+
+        z_y(t_i + h) = Phi z_y(t_i) + Gamma[0]^T [y_i, y_(i+1)]   (and u with Gamma[1])
+        int_0^span e^(-beta (span - tau)) X^T Q X dtau = v^T W v
+
+    for each of `forms` (q, n+m+2, n+m+2), X the filtered signals [y/C .. s^n y/C,
+    u/C .. s^m u/C] and v = [z_y; z_u; y_i; y_(i+1); u_i; u_(i+1)]. One matrix exponential
+    per step and form (Van Loan, 1978), all in one call: its diagonal block is the filters'.
+    """
+    order = A.shape[0]
+    width = order + 2  # one signal's state [z; a; b]
+    d = 2 * width
+    span = steps if span is None else np.broadcast_to(span, steps.shape)
+    F = linalg.block_diag(_drift(A, B), _drift(A, B)) + 0.5 * beta * np.eye(d)
+    select = np.zeros((n + m + 2, d))  # X = select @ x
+    select[: n + 1, : n + 1] = np.eye(n + 1)
+    select[n + 1 :, width : width + m + 1] = np.eye(m + 1)
+    block = np.zeros((steps.size, len(forms), 2 * d, 2 * d))
+    block[:, :, :d, :d] = -F.T
+    block[:, :, :d, d:] = select.T @ forms @ select
+    block[:, :, d:, d:] = F
+    E = linalg.expm(block * span[:, None, None, None])
+    to_x = np.zeros((steps.size, d, d))  # x = to_x @ v
+    to_x[:, :order, :order] = np.eye(order)
+    to_x[:, width : width + order, order : 2 * order] = np.eye(order)
+    to_x[:, order : order + 2, 2 * order : 2 * order + 2] = _interpolation(steps, "linear")
+    to_x[:, width + order :, 2 * order + 2 :] = _interpolation(steps, hold)
+    flow = E[:, 0, d:, d:] * np.exp(-0.5 * beta * span)[:, None, None] @ to_x  # x(span) from v
+    Phi = flow[:, :order, :order]  # the same for both filters
+    Gamma = np.stack([flow[:, :order, 2 * order : 2 * order + 2],
+                      flow[:, width : width + order, 2 * order + 2 :]], 1)  # fmt: skip
+    Gamma = np.swapaxes(Gamma, 2, 3)  # (steps, signal, [w_i, w_(i+1)], order)
+    W = np.swapaxes(E[..., d:, d:], -1, -2) @ E[..., :d, d:]
+    W *= np.exp(-beta * span)[:, None, None, None]
+    W = np.swapaxes(to_x, -1, -2)[:, None] @ W @ to_x[:, None]
+    return Phi, Gamma, 0.5 * (W + np.swapaxes(W, -1, -2))
+
+
+def _propagate(Phi, Gamma, ends, z0, index=None, out=None) -> np.ndarray:
+    """States of a batch of recursions z_(i+1) = Phi[k] z_i + Gamma[k, b]^T ends[b, i].
+
+    k = index_i (None: 0); Phi (k, s, s), Gamma (k, batch, e, s), ends (batch, n, e), z0
+    (batch, s); the states (batch, n + 1, s), from z_0 = z0, are written into `out` if
+    given. By blocks of L intervals: the responses of all blocks from rest advance together
+    (one matrix product per position in a block), the block starts follow one another (the
+    same recursion with the blocks' transition matrices, done the same way), and each
+    block's free response from its start is added. Python loops run over about
+    3 L log(n) / log(L) steps, each a small product over all blocks. The arithmetic is the
+    plain recursion's, exact for every step: no transfer function in z, whose coefficients
+    lose all accuracy when the filter's poles crowd near z = 1 at fine sampling.
+    """
+    batch, count = ends.shape[:2]
+    size = Phi.shape[-1]
+    z0 = np.array(z0, dtype=float)  # a copy: z0 may be a view of out
+    out = np.empty((batch, count + 1, size)) if out is None else out
+    out[:, 0] = z0
+    transposed = np.swapaxes(Phi, -1, -2)
+    length = max(4, min(32, math.isqrt(count)))
+    blocks = count // length if count > 2 * length else 0
+    done = blocks * length
+    if blocks:
+        O = out[:, :done].reshape(batch, blocks, length, size)  # from rest, then from starts
+        E = ends[:, :done].reshape(batch, blocks, length, -1)
+        O[:, :, 0] = 0.0
+        if index is None:
+            for j in range(length - 1):
+                np.matmul(O[:, :, j], transposed[0], out=O[:, :, j + 1])
+                O[:, :, j + 1] += E[:, :, j] @ Gamma[0]
+            last = O[:, :, -1] @ transposed[0] + E[:, :, -1] @ Gamma[0]
+            powers = np.empty((length + 1, size, size))
+            powers[0] = np.eye(size)
+            for j in range(length):
+                np.matmul(Phi[0], powers[j], out=powers[j + 1])
+            identity = np.broadcast_to(np.eye(size), (1, batch, size, size))
+            starts = _propagate(powers[length:], identity, last, z0)
+            for j in range(length):
+                O[:, :, j] += starts[:, :blocks] @ powers[j].T
+        else:
+            where = index[:done].reshape(blocks, length)
+
+            def advance() -> np.ndarray:
+                for j in range(length):
+                    k = where[:, j]
+                    drive = E[:, :, j, None] @ np.swapaxes(Gamma[k], 0, 1)
+                    following = (O[:, :, j, None] @ transposed[k] + drive)[:, :, 0]
+                    if j + 1 < length:
+                        O[:, :, j + 1] = following
+                return following
+
+            last = advance()
+            carry = np.broadcast_to(np.eye(size), (blocks, size, size))
+            for j in range(length):
+                carry = Phi[where[:, j]] @ carry
+            identity = np.broadcast_to(np.eye(size), (blocks, batch, size, size))
+            starts = _propagate(carry, identity, last, z0, np.arange(blocks))
+            O[:, :, 0] = starts[:, :blocks]
+            advance()
+        out[:, done] = starts[:, blocks]
+    for i in range(done, count):  # what the blocks leave: step by step
+        k = 0 if index is None else index[i]
+        following = out[:, i, None] @ transposed[k] + ends[:, i, None] @ Gamma[k]
+        out[:, i + 1] = following[:, 0]
+    return out
+
+
+# The cost: J(k, t) as a polynomial in k, built from the moments layer and Theta -------------
+#
+# Polynomials in k are rows of coefficients in ascending powers (row[p] multiplies k^p), or
+# of Taylor coefficients about a centre (row[i] = J^(i)(centre) / i!); most functions take
+# a stack of rows, one per sample, and work on all of them at once.
+
+NOISE = 10.0  # rounding noise: within NOISE (1 + memory / step) eps of the terms it sums
+ROUNDING = 16 * np.finfo(float).eps
+
+
+def _cost_forms(Theta: np.ndarray) -> np.ndarray:
+    """Q_p (2N+1, n+m+2, n+m+2): the k^p coefficient of g^2 / 2 is X^T Q_p X.
+
+    g(k) = X^T Theta K(k) with K(k) = [1, k, ..., k^N], so g^2 / 2 sums Theta_a Theta_b^T / 2
+    over the pairs of columns a + b = p. This is the only place Theta meets the moments.
+    """
+    width = Theta.shape[1]
+    forms = np.zeros((2 * width - 1, Theta.shape[0], Theta.shape[0]))
+    for a in range(width):
+        for b in range(width):
+            forms[a + b] += 0.5 * np.outer(Theta[:, a], Theta[:, b])
+    return forms
+
+
+def _taylor(P: np.ndarray, k) -> np.ndarray:
+    """Taylor coefficients about k of each row of P (ascending powers): row[i] = P^(i)(k)/i!."""
+    a = np.array(P, dtype=float)
+    k = np.asarray(k, dtype=float)
+    degree = a.shape[-1] - 1
+    for low in range(degree):  # repeated synthetic division by (x - k)
+        for i in range(degree - 1, low - 1, -1):
+            a[..., i] += k * a[..., i + 1]
+    return a
+
+
+def _value(P: np.ndarray, k) -> np.ndarray:
+    """Each row polynomial (ascending) at its k (Horner)."""
+    value = np.zeros(np.broadcast_shapes(P.shape[:-1], np.shape(k)))
+    for p in range(P.shape[-1] - 1, -1, -1):
+        value = value * k + P[..., p]
+    return value
+
+
+def _slopes(P: np.ndarray, k) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """J_1 and J_2 of each row at its k, and the size of the terms J_1 sums (its rounding)."""
+    degree = P.shape[-1] - 1
+    first = second = size = 0.0
+    for p in range(degree, 0, -1):
+        first = first * k + p * P[..., p]
+        size = size * np.abs(k) + p * np.abs(P[..., p])
+        if p >= 2:
+            second = second * k + p * (p - 1) * P[..., p]
+    return first, second, size
+
+
+def _curvature_floor(A: np.ndarray, reach) -> np.ndarray:
+    """A lower bound of J_2 on the interval within `reach` of the centre of the Taylor rows A.
+
+    J_2(centre + d) = sum_(i >= 2) i (i - 1) A_i d^(i-2): the terms beyond the first can
+    lower it by at most sum_(i >= 3) i (i - 1) |A_i| reach^(i-2).
+    """
+    floor = 2.0 * A[..., 2]
+    power = np.ones_like(floor)
+    for i in range(3, A.shape[-1]):
+        power = power * reach
+        floor = floor - i * (i - 1) * np.abs(A[..., i]) * power
+    return floor
+
+
+def _newton(P: np.ndarray, k, iterations: int = 12) -> tuple[np.ndarray, np.ndarray]:
+    """Stationary points of each row near k by Newton's method: (points, converged).
+
+    Converged means J_1 is within rounding of the terms it sums and J_2 > 0 there (a local
+    minimum); one more step polishes it. Rows that do not converge are left as they are.
+    """
+    k = np.array(np.broadcast_to(k, P.shape[:-1]), dtype=float)
+    done = np.zeros(k.shape, dtype=bool)
+    for _ in range(iterations):
+        first, second, size = _slopes(P, k)
+        ok = second > 0
+        step = np.where(ok, -first / np.where(ok, second, 1.0), 0.0)
+        settled = ok & (np.abs(first) <= ROUNDING * size)
+        k = np.where(done, k, k + step)
+        done |= settled
+        if done.all():
+            break
+    first, second, size = _slopes(P, k)
+    return k, done & (second > 0) & np.isfinite(k)
+
+
+def _companion_roots(D: np.ndarray) -> np.ndarray:
+    """All complex roots of each row polynomial D (ascending), NaN-padded to D's degree.
+
+    Rows whose leading coefficients vanish have lower degree; each degree is one batch of
+    companion-matrix eigenvalue problems.
+    """
+    rows, width = D.shape
+    roots = np.full((rows, max(width - 1, 0)), np.nan + 0j)
+    nonzero = D != 0
+    degree = np.where(nonzero.any(1), width - 1 - np.argmax(nonzero[:, ::-1], 1), 0)
+    for order in np.unique(degree):
+        if order < 1:
+            continue
+        which = np.flatnonzero(degree == order)
+        companion = np.zeros((which.size, order, order))
+        companion[:, 1:, :-1] = np.eye(order - 1)
+        companion[:, :, -1] = -D[which, :order] / D[which, order, None]
+        roots[which, :order] = np.linalg.eigvals(companion)
+    return roots
+
+
+def _polish(D: np.ndarray, x: np.ndarray, steps: int = 2) -> np.ndarray:
+    """A few Newton steps on the roots x of D (ascending rows), kept only where they help."""
+    dD = D[..., 1:] * np.arange(1, D.shape[-1])
+    for _ in range(steps):
+        value, slope = _value(D[:, None, :], x), _value(dD[:, None, :], x)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            better = x - value / slope
+        keep = np.isfinite(better) & (np.abs(_value(D[:, None, :], better)) < np.abs(value))
+        x = np.where(keep, better, x)
+    return x
+
+
+def _global_minimisers(A: np.ndarray, centre, bounds: tuple[float, float]) -> np.ndarray:
+    """The global minimiser of each row polynomial within bounds, NaN where it has none.
+
+    A are Taylor rows about `centre` (or ascending coefficients, centre 0). Candidates are
+    the real parts of every root of J' (a complex pair close to the real line is harmless:
+    it is never lower than the true minimum) and the finite bounds; the lowest wins. Without
+    a finite bound on a side where J is not bounded below (odd degree, or a negative
+    leading coefficient), or when J is constant, there is no minimiser.
+    """
+    A = np.atleast_2d(A)
+    centre = np.broadcast_to(np.asarray(centre, dtype=float), A.shape[:1])
+    lo, hi = bounds[0] - centre, bounds[1] - centre
+    D = A[:, 1:] * np.arange(1, A.shape[1])
+    candidates = _companion_roots(D).real
+    candidates = np.concatenate([candidates, np.broadcast_to(lo, A.shape[:1])[:, None],
+                                 np.broadcast_to(hi, A.shape[:1])[:, None]], 1)  # fmt: skip
+    inside = (candidates >= lo[:, None]) & (candidates <= hi[:, None]) & np.isfinite(candidates)
+    values = np.where(inside, _value(A[:, None, :], np.where(inside, candidates, 0.0)), np.inf)
+    best = np.argmin(values, 1)
+    x = candidates[np.arange(A.shape[0]), best]
+    interior = best < candidates.shape[1] - 2
+    x = np.where(interior, _polish(D, x[:, None])[:, 0], x)
+    x = np.clip(x, lo, hi)
+    nonzero = A[:, 1:] != 0
+    degree = np.where(nonzero.any(1), A.shape[1] - 1 - np.argmax(nonzero[:, ::-1], 1), 0)
+    lead = A[np.arange(A.shape[0]), degree]
+    downhill_left = (degree % 2 == 1) & (lead > 0) | (degree % 2 == 0) & (lead < 0)
+    downhill_right = lead < 0
+    none = (degree == 0) | ~np.isfinite(values[np.arange(A.shape[0]), best])
+    none |= downhill_left & np.isinf(lo) | downhill_right & np.isinf(hi)
+    return np.where(none, np.nan, centre + x)
+
+
+def _local_minima(A: np.ndarray, centre: float) -> np.ndarray:
+    """Every local minimum of one polynomial (Taylor row A about centre), ascending."""
+    D = A[None, 1:] * np.arange(1, A.size)
+    roots = _companion_roots(D)[0]
+    roots = roots[np.isfinite(roots)]
+    real = roots[np.abs(roots.imag) <= 1e-9 * np.maximum(1.0, np.abs(roots))].real
+    real = _polish(D, real[None, :])[0]
+    curvature = _value(D[0, 1:] * np.arange(1, D.shape[1]), real)
+    return np.sort(centre + real[curvature > 0])
+
+
+# The engine: exact moments accumulated with forgetting, and the estimate that follows them ---
+#
+# J(k, t_i) = sum over intervals l < i of e^(-beta (t_i - t_(l+1))) q_l(k), plus the prior,
+# where q_l(k) = v_l^T W(k) v_l is interval l's exact contribution. The estimate k^ is the
+# stationary point J_1 = 0 continued from k0 (the paper's ODE describes the same curve:
+# d/dt J_1 = 0 along it), followed sample by sample: Newton's method on the exact
+# polynomial, accepted while J_2 stays positive between the old and the new point (so the
+# same branch is followed). Where it does not, the interval is crossed in sub-steps on the
+# exact partial-interval polynomials, and a fold (J_2 reaching zero, where the ODE stops)
+# ends the run.
+#
+# No information, no update: an interval over which every coefficient of the error
+# polynomial g(k) = phi^T K(k) is rounding noise, at both ends, relative to the filtered
+# signals it sums, adds nothing. Otherwise, once forgetting has shrunk the stored
+# information, the rounding of a settled record would move the estimate. The threshold is
+# NOISE (1 + memory / step) eps: a filter state's rounding accumulates over the steps of
+# the filter's memory (its slowest time constant).
+
+
+@dataclass(frozen=True)
+class _Setup:
+    """What every run with one filter, forgetting factor, hold and Theta shares."""
+
+    Theta: np.ndarray
+    A: np.ndarray
+    B: np.ndarray
+    beta: float
+    hold: str
+    forms: np.ndarray  # the cost's quadratic forms in X, one per power of k
+    memory: float  # the filter's slowest time constant
+    state_scale: np.ndarray  # s^i w/C is about state_scale[i] times w/C
+
+    @staticmethod
+    def of(Theta: np.ndarray, c: np.ndarray, beta: float, hold: str) -> "_Setup":
+        A, B = _realisation(c)
+        order = c.size - 1
+        scale = (c[-1] / c[0]) ** (np.arange(order) / order)
+        return _Setup(Theta, A, B, beta, hold, _cost_forms(Theta), _memory(c), scale)
+
+    def maps(self, steps: np.ndarray):
+        """Phi, Gamma (both filters, as one block-diagonal system) and the cost forms W."""
+        return _interval_maps(self.A, self.B, steps, self.beta, self.hold, self.forms)
+
+    def partial(self, step: float, span: float) -> np.ndarray:
+        """The cost forms over the first `span` of an interval of length `step`."""
+        maps = _interval_maps(self.A, self.B, np.array([step]), self.beta, self.hold,
+                              self.forms, span=span)  # fmt: skip
+        return maps[2][0]
+
+    def quiet(self, flat: np.ndarray, steps) -> np.ndarray:
+        """Whether each interval is rounding noise (see above), from the filter states
+        [z_y, z_u] at every sample and the steps (one, or one per interval).
+
+        A filter state's rounding is about eps times the size of the whole state (each
+        entry scaled to w/C), which bounds |z| @ (1 / state_scale) within a factor order.
+        """
+        order = self.A.shape[0]
+        Theta = np.zeros((2 * order, N + 1))  # phi = z @ Theta: X is the first n+1, m+1
+        Theta[: n + 1], Theta[order : order + m + 1] = self.Theta[: n + 1], self.Theta[n + 1 :]
+        scale = np.r_[self.state_scale, self.state_scale]
+        reach = (np.abs(Theta) * scale[:, None]).reshape(2, order, -1).sum(1)
+        reach = np.repeat(reach, order, axis=0) / scale[:, None]  # floor = |z| @ reach
+        phi = np.abs(flat @ Theta)
+        floor = np.abs(flat) @ reach
+        limit = NOISE * np.finfo(float).eps * (1.0 + self.memory / np.asarray(steps))
+        limit = limit[:, None] if np.ndim(limit) else limit
+        return ((phi[:-1] <= limit * floor[:-1]) & (phi[1:] <= limit * floor[1:])).all(1)
+
+
+def _moments_input(z0: np.ndarray, y: np.ndarray, u: np.ndarray, maps, index) -> np.ndarray:
+    """Rows [z_y,l; z_u,l; y_l; y_(l+1); u_l; u_(l+1)], l = 0..len(y) - 1 (the last row's
+    sample values unused): the filter states at every sample, from z0 at the first, and
+    each interval's vector v_l (all rows but the last), in one array."""
+    Phi, Gamma, _ = maps
+    order = Phi.shape[-1]
+    rows = np.empty((y.size, 2 * order + 4))
+    ends = rows[:-1, 2 * order :]
+    ends[:, 0], ends[:, 1], ends[:, 2], ends[:, 3] = y[:-1], y[1:], u[:-1], u[1:]
+    rows[-1, 2 * order :] = 0.0
+    states = rows[:, : 2 * order].reshape(y.size, 2, order).swapaxes(0, 1)  # views of rows
+    pairs = ends.reshape(y.size - 1, 2, 2).swapaxes(0, 1)
+    _propagate(Phi, Gamma, pairs, z0.reshape(2, order), index, out=states)
+    return rows
+
+
+def _interval_costs(V: np.ndarray, W: np.ndarray, index) -> np.ndarray:
+    """q (intervals, 2N+1): each interval's contribution to J's coefficients, v^T W_p v."""
+    count, d = V.shape
+    if index is None:
+        products = V @ np.swapaxes(W[0], 0, 1).reshape(d, -1)
+        q = np.einsum("npd,nd->np", products.reshape(count, -1, d), V)
+    else:
+        q = np.empty((count, W.shape[1]))
+        for lo in range(0, count, 2048):
+            part = slice(lo, lo + 2048)
+            q[part] = np.einsum("nd,npde,ne->np", V[part], W[index[part]], V[part])
+    q[:, 0] = np.maximum(q[:, 0], 0.0)  # integrals of squares: never negative but by rounding
+    q[:, -1] = np.maximum(q[:, -1], 0.0)
+    return q
+
+
+class _Run:
+    """What the estimator carries from one sample to the next.
+
+    `estimate` feeds it a record chunk by chunk and a Tracker one update at a time, so both
+    give the same numbers. J(k, t) at the last sample is exp(log_scale) * P(k) with P of
+    order one: with forgetting, the information shrinks as e^(-beta t), far below the
+    smallest float in a long record, but its shape (all that k^ depends on) does not.
+    """
+
+    def __init__(self, setup: _Setup, k0: float, S0: float):
+        self.setup = setup
+        self.z = np.zeros(2 * setup.A.shape[0])  # the filter states [z_y, z_u]
+        self.t = -math.inf  # the last sample: time and values
+        self.u = self.y = 0.0
+        self.P = np.zeros(2 * N + 1)
+        self.P[:3] = [k0 * k0, -2.0 * k0, 1.0]  # the prior S0 (k - k0)^2 / 2
+        self.log_scale = math.log(0.5 * S0)
+        self.khat = k0
+        self.taylor = _taylor(self.P, k0)  # of J about k^, scaled as P
+        self.ok, self.stopped_at = True, None
+        self.informed = -math.inf  # the time of the last informative sample
+        self.cache: dict[float, tuple] = {}
+
+    def _maps(self, steps: np.ndarray, resolution: float):
+        """Phi, Gamma and W for each step, made once per distinct step and kept."""
+        found = []
+        for h in steps.tolist():
+            key = next((key for key in self.cache if abs(key - h) <= resolution), None)
+            if key is None:
+                if len(self.cache) >= 256:  # an irregular stream: forget the oldest
+                    del self.cache[next(iter(self.cache))]
+                key = h
+                self.cache[key] = tuple(part[0] for part in self.setup.maps(np.array([h])))
+            found.append(self.cache[key])
+        return tuple(np.stack(parts) for parts in zip(*found, strict=True))
+
+    def advance(self, t: np.ndarray, u: np.ndarray, y: np.ndarray, record: bool = False):
+        """Take checked samples that follow the last. With record, return for each sample
+        reached (all of them unless the run stops) t, k^, the Taylor rows of J about k^
+        and their log scale (J's i-th derivative is i! row[i] exp(scale))."""
+        pieces = []
+        if self.t == -math.inf and t.size:
+            self.t, self.u, self.y, self.informed = t[0], u[0], y[0], t[0]
+            if record:
+                pieces.append((t[:1], np.array([self.khat]), self.taylor[None],
+                               np.array([self.log_scale])))  # fmt: skip
+            t, u, y = t[1:], u[1:], y[1:]
+        span = 300.0 / self.setup.beta if self.setup.beta > 0 else math.inf
+        start = 0
+        while start < t.size:  # pieces short enough to weigh without overflow
+            end = min(start + BLOCK, int(np.searchsorted(t, t[start] + span, "right")))
+            piece = self._piece(t[start:end], u[start:end], y[start:end])
+            pieces.append(piece)
+            if record and not self.ok:
+                break
+            start = end
+        if record:
+            return tuple(np.concatenate(parts) for parts in zip(*pieces, strict=True))
+        return None
+
+    def _piece(self, t, u, y):
+        setup = self.setup
+        times, us, ys = (np.concatenate([[last], new]) for last, new in
+                         ((self.t, t), (self.u, u), (self.y, y)))  # fmt: skip
+        steps = _Steps.of(times)
+        resolution = TIME_RESOLUTION * max(abs(times[0]), abs(times[-1]))
+        maps = self._maps(steps.values, resolution)
+        rows = _moments_input(self.z, ys, us, maps, steps.index)
+        width = self.z.size
+        q = _interval_costs(rows[:-1], maps[2], steps.index)
+        quiet = setup.quiet(rows[:, :width], steps.values if steps.index is None else steps.at(steps.values))
+        q[quiet] = 0.0
+        if not quiet.all():
+            self.informed = times[1 + np.flatnonzero(~quiet)[-1]]
+        # the discounted sums, all scaled by exp(-top) so that nothing overflows
+        offset = times[1:] - times[0]
+        with np.errstate(divide="ignore"):
+            size = np.log(np.abs(q).max(1))
+        top = max(self.log_scale, float(np.max(setup.beta * offset + size)))
+        start = self.P * math.exp(self.log_scale - top)
+        E = np.cumsum(q * np.exp(setup.beta * offset - top)[:, None], 0) + start
+        log_scale = top - setup.beta * offset
+
+        def partial(l: int, tau: float) -> np.ndarray:
+            """J at times[l] + tau, scaled as E: exact, the interval's contribution so far."""
+            before = E[l - 1] if l else start
+            h = times[l + 1] - times[l]
+            if tau >= h:
+                return E[l]
+            if quiet[l]:
+                return before
+            weight = math.exp(setup.beta * (times[l] - times[0] + tau) - top)
+            v = rows[l]
+            return before + weight * np.einsum("d,pde,e->p", v, setup.partial(h, tau), v)
+
+        khat, taylor = self._follow(E, times, quiet, partial) if self.ok else (np.empty(0), E[:0])
+        self.z, self.t, self.u, self.y = rows[-1, :width], times[-1], us[-1], ys[-1]
+        scale = np.abs(E[-1]).max()
+        self.P, self.log_scale = E[-1] / scale, log_scale[-1] + math.log(scale)
+        if khat.size:
+            self.khat = khat[-1]
+        self.taylor = _taylor(self.P, self.khat)
+        return t[: khat.size], khat, taylor, log_scale[: khat.size]
+
+    def _follow(self, E: np.ndarray, times: np.ndarray, quiet: np.ndarray, partial):
+        """k^ and the Taylor rows of J about it at each new sample, up to a fold; after a
+        quiet interval (no information), k^ is the one before it."""
+        count = E.shape[0]
+        khat, taylor = np.empty(count), np.empty_like(E)
+        k, before = self.khat, self.taylor
+        i, window = 0, count  # all at once, unless k^ moves too far for one Newton start
+        while i < count:
+            j = min(count, i + window)
+            candidate, converged = _newton(E[i:j], k)  # all from k: one vectorised solve
+            if quiet[i:j].any():  # no information, no update
+                last = np.maximum.accumulate(np.where(quiet[i:j], -1, np.arange(j - i)))
+                candidate = np.where(last < 0, k, candidate[last])
+                converged = (last < 0) | converged[last]
+            previous = np.concatenate([[k], candidate[:-1]])
+            reach = np.abs(candidate - previous)
+            own = _taylor(E[i:j], candidate)
+            back = np.concatenate([before[None], own[:-1]])
+            good = converged & (_curvature_floor(_taylor(E[i:j], previous), reach) > 0)
+            good &= _curvature_floor(back, reach) > 0
+            run = j - i if good.all() else int(np.argmin(good))
+            if run:
+                khat[i : i + run], taylor[i : i + run] = candidate[:run], own[:run]
+                k, before = candidate[run - 1], own[run - 1]
+                window = 2 * window if i + run == j else 16
+                i += run
+                continue
+            k = self._cross(i, k, before, times, partial)  # Newton from k^ itself failed
+            if k is None:
+                return khat[:i], taylor[:i]
+            before = _taylor(E[i], k)
+            khat[i], taylor[i] = k, before
+            i, window = i + 1, 16
+        return khat, taylor
+
+    def _cross(self, l: int, k: float, before: np.ndarray, times: np.ndarray, partial):
+        """k^ at the end of interval l, followed in sub-steps; None at a fold (the run stops)."""
+        h = times[l + 1] - times[l]
+        done, step = 0.0, 0.5 * h  # in one step, the whole interval failed
+        while True:
+            target = min(h, done + step)
+            P = partial(l, target)
+            r, converged = _newton(P[None], k)
+            reach = abs(r[0] - k)
+            if (
+                converged[0]
+                and _curvature_floor(_taylor(P, k), reach) > 0
+                and _curvature_floor(before, reach) > 0
+            ):
+                done, k, before = target, float(r[0]), _taylor(P, r[0])
+                if done >= h:
+                    return k
+                step *= 2.0
+                continue
+            step *= 0.5
+            if step <= h * 2.0**-40:
+                self.ok, self.stopped_at = False, float(times[l] + done)
+                return None
+
+
+# The paper's estimate: k^(t) from k0, with the cost around it ---------------------------------
+
+
+@dataclass(frozen=True)
+class Estimate:
+    """The estimate at the sample times the run reached, and the cost around it.
+
+    t: sample times; khat: the estimate k^ there (the paper's trajectory from k0);
+    global_k: the global minimiser of J(., t) within `bounds` at each (NaN where J has none);
+    ok: False when the run stopped early, `message` says why and `stopped_at` when;
+    informed_until: the time after which the data were rounding noise and left the estimate
+    unchanged (None when they inform it to the end). J (a property): rows J_2..J_2N, the
+    derivatives of the cost with respect to k at k^.
+    """
+
+    t: np.ndarray
+    khat: np.ndarray
+    global_k: np.ndarray
+    ok: bool
+    message: str
+    stopped_at: float | None
+    informed_until: float | None
+    bounds: tuple[float, float]
+    _shape: np.ndarray = field(repr=False)  # J_i / J_2, i = 2..2N (J scaled to J_2 = 1)
+    _log_J2: np.ndarray = field(repr=False)  # log J_2: J_2 alone may underflow
+
+    @property
+    def J(self) -> np.ndarray:
+        """Rows J_2..J_2N at k^, at every sample (they shrink as e^(-beta t))."""
+        return self._shape * np.exp(self._log_J2)
+
+    @property
+    def k(self) -> float:
+        """The final estimate."""
+        return float(self.khat[-1])
+
+    @property
+    def at_global(self) -> bool:
+        """Whether the final k^ is the global minimiser of J within the bounds (True when J
+        has no global minimiser to compare with)."""
+        best = self.global_k[-1]
+        return bool(np.isnan(best) or abs(self.k - best) <= 1e-6 * (abs(self.k) + abs(best)))
+
+    def _index(self, t) -> int:
+        if t is None:
+            return self.t.size - 1
+        time = _real("t", t)
+        index = int(np.searchsorted(self.t, time, "right")) - 1
+        if index < 0:
+            raise ValueError(f"t = {time} is before the first sample time {self.t[0]}")
+        return index
+
+    def _row(self, index: int) -> np.ndarray:
+        """Taylor row of (J(k) - J(k^)) / J_2 about k^ at one sample (J_1 = 0 there)."""
+        row = np.zeros(2 * N + 1)
+        row[2:] = self._shape[:, index] / FACTORIALS[2:]
+        return row
+
+    def normalised_cost(self, k, t=None):
+        """(J(k) - J(k^)) / J_2 at the sample at or before time t (default the last), for
+        scalar or array k: (k - k^)^2 / 2 near k^, and independent of the scale of C(s)."""
+        i = self._index(t)
+        return _value(self._row(i), np.asarray(k, dtype=float) - self.khat[i])
+
+    def cost(self, k, t=None):
+        """J(k) - J(k^) at the sample at or before time t (default the last).
+
+        J is a polynomial of degree 2N in k whose derivatives at k^ are J_1 = 0 and
+        J_2..J_2N, so its Taylor series about k^ is exact.
+        """
+        i = self._index(t)
+        return self.normalised_cost(k, self.t[i]) * math.exp(self._log_J2[i])
+
+    def minima(self, t=None) -> np.ndarray:
+        """Every local minimum of the cost in k at the sample at or before t, ascending."""
+        i = self._index(t)
+        return _local_minima(self._row(i), self.khat[i])
+
+
+def estimate(
+    t,
+    u,
+    y,
+    *,
+    k0: float,
+    beta: float = 0.1,
+    S0: float = 1e-4,
+    C=None,
+    hold: str = "linear",
+    engine: str = "moments",
+    bounds=None,
+    method: str = "RK23",
+    rtol: float = 1e-6,
+    atol: float = 1e-9,
+    max_step: float = math.inf,
+    progress=None,
+    **known: float,
+) -> Estimate:
+    """Estimate k from samples of input u and output y at times t (the paper's algorithm).
+
+    The error g(t, k) = X(t)^T Theta K(k), with X the state-variable-filtered data
+    [y/C, ..., s^n y/C, u/C, ..., s^m u/C] and K(k) = [1, k, ..., k^N], is a polynomial
+    in k; so is the cost
+        J(k, t) = 1/2 e^(-beta (t - t0)) S0 (k - k0)^2 + 1/2 int_t0^t e^(-beta (t - tau)) g^2 dtau.
+    k^(t) is its stationary point J_1 = 0 continued from k^(t0) = k0: the trajectory of
+    the paper's ODE (Nihtila, 1983)
+        dk^/dt = -h_1 / J_2,   dJ_i/dt = -beta J_i + h_i + J_(i+1) dk^/dt  (i = 2..2N),
+    h_i = 1/2 d^i(g^2)/dk^i, J_(2N+1) = 0, J_2(t0) = S0. Between samples the output is
+    interpolated linearly, and so is the input (hold="linear") unless it was held
+    (hold="zoh", as from a digital-to-analogue converter).
+
+    engine="moments" (the default) computes J exactly at every sample, as a polynomial,
+    from the filter's exact moments over each sample interval, and follows J_1 = 0 on it
+    sample by sample; an interval whose data are rounding noise leaves k^ unchanged
+    (`informed_until` says from when). engine="ode" integrates the ODE above with scipy's
+    adaptive Runge-Kutta solver `method` (RK23, as the paper's ode23), tolerances rtol and
+    atol on every state and steps at most max_step: the paper's computation, for checks.
+
+    C is the filter (see `filter_polynomial`): None for (1 + s)^(n+1), a time constant T
+    for (1 + sT)^(n+1), or coefficients, highest power first. global_k is the global
+    minimiser of J(., t) within bounds=(lo, hi) (default the real line) at every sample.
+    progress, if given, is called with the time reached as the run goes. If J_2 reaches
+    zero along k^ (it has left the region where the cost is convex, and the ODE would
+    divide by zero), the run stops there and the result says so; it never holds NaN
+    estimates.
+    """
+    t, u, y = _signals(("t", t), ("u", u), ("y", y), minimum=2)
+    k0 = _real("k0", k0)
+    beta = _positive("beta", beta, allow_zero=True)
+    S0 = _positive("S0", S0)
+    rtol, atol = _positive("rtol", rtol), _positive("atol", atol)
+    if not max_step > 0:
+        raise ValueError(f"max_step must be > 0, not {max_step}")
+    _choice("hold", hold, HOLDS)
+    _choice("engine", engine, ENGINES)
+    _choice("method", method, METHODS)
+    bounds = _bounds(bounds)
+    Theta, c = theta(**known), filter_polynomial(C)
+    informed = None
+    if engine == "ode":
+        times, khat, J, stop = _integrate(
+            Theta, c, t, u, y, k0=k0, beta=beta, S0=S0, hold=hold, method=method,
+            rtol=rtol, atol=atol, max_step=max_step, progress=progress,
+        )  # fmt: skip
+        shape, log_J2 = J / J[0], np.log(J[0])
+    else:
+        run = _Run(_Setup.of(Theta, c, beta, hold), k0, S0)
+        parts = []
+        for lo in range(0, t.size, BLOCK):
+            parts.append(run.advance(t[lo : lo + BLOCK], u[lo : lo + BLOCK], y[lo : lo + BLOCK],
+                                     record=True))  # fmt: skip
+            if progress is not None:
+                progress(float(parts[-1][0][-1]) if parts[-1][0].size else float(t[lo]))
+            if not run.ok:
+                break
+        times, khat, taylor, log_scale = (np.concatenate(part) for part in zip(*parts, strict=True))
+        J = taylor[:, 2:].T * np.array(FACTORIALS[2:])[:, None]
+        shape, log_J2 = J / J[0], log_scale + np.log(J[0])
+        stop = None if run.ok else (run.stopped_at, _convexity_lost(run.stopped_at))
+        informed = None if run.informed >= t[-1] else float(run.informed)
+    rows = np.zeros((times.size, 2 * N + 1))
+    rows[:, 2:] = shape.T / np.array(FACTORIALS[2:])
+    best = np.concatenate(
+        [_global_minimisers(rows[lo : lo + BLOCK], khat[lo : lo + BLOCK], bounds)
+         for lo in range(0, times.size, BLOCK)]
+    )  # fmt: skip
+    if stop is not None:
+        message = stop[1]
+    else:
+        message = f"reached t = {t[-1]:.6g}"
+        if informed is not None:
+            message += (
+                f"; the data stopped informing the estimate at t = {informed:.6g} (after "
+                "that they are rounding noise, which leaves it unchanged)"
+            )
+    return Estimate(
+        t=times, khat=khat, global_k=best, ok=stop is None, message=message,
+        stopped_at=None if stop is None else float(stop[0]), informed_until=informed, bounds=bounds, _shape=shape,
+        _log_J2=log_J2,
+    )  # fmt: skip
+
+
+# engine="ode": the paper's ODE, integrated as the paper did (for cross-checks) -----------------
 
 
 def _half_square_derivatives(phi: list[float], k: float) -> list[float]:
@@ -317,96 +1168,9 @@ def _right_hand_side(Theta, c, beta, t, u, y, hold):
     return rhs, size, khat
 
 
-@dataclass(frozen=True)
-class Estimate:
-    """The estimator's trajectory at the sample times it reached.
-
-    t: sample times; khat: the estimate k^ at those times; J: rows J_2..J_2N, the
-    derivatives of the cost with respect to k at k^; ok: False when the run stopped
-    early, `message` says why and `stopped_at` when.
-    """
-
-    t: np.ndarray
-    khat: np.ndarray
-    J: np.ndarray
-    ok: bool
-    message: str
-    stopped_at: float | None
-
-    @property
-    def k(self) -> float:
-        """The final estimate."""
-        return float(self.khat[-1])
-
-    def cost(self, k):
-        """J(k) - J(k^) at the last time, for scalar or array k.
-
-        J is a polynomial of degree 2N in k whose derivatives at k^ are J_1 = 0 and
-        J_2..J_2N, so its Taylor series about k^ is exact.
-        """
-        d = np.asarray(k, dtype=float) - self.khat[-1]
-        terms = [J_i / FACTORIALS[i] for i, J_i in enumerate(self.J[:, -1], start=2)]
-        return np.polyval([*terms[::-1], 0.0, 0.0], d)
-
-    def minima(self) -> np.ndarray:
-        """Every local minimum of the cost polynomial in k at the last time, ascending."""
-        J = self.J[:, -1]
-        slope = [J_i / FACTORIALS[i - 1] for i, J_i in enumerate(J, start=2)]  # J'(k^ + d)
-        roots = np.roots([*slope[::-1], 0.0])
-        d = roots[np.abs(roots.imag) <= 1e-9 * np.maximum(1.0, np.abs(roots))].real
-        curvature = sum(J_i * d ** (i - 2) / FACTORIALS[i - 2] for i, J_i in enumerate(J, start=2))
-        return np.sort(self.khat[-1] + d[curvature > 0])
-
-
-def estimate(
-    t,
-    u,
-    y,
-    *,
-    k0: float,
-    beta: float = 0.1,
-    S0: float = 1e-4,
-    C=None,
-    hold: str = "linear",
-    method: str = "RK23",
-    rtol: float = 1e-6,
-    atol: float = 1e-9,
-    max_step: float = math.inf,
-    progress=None,
-    **known: float,
-) -> Estimate:
-    """Estimate k from samples of input u and output y at times t (the paper's algorithm).
-
-    The error g(t, k) = X(t)^T Theta K(k), with X the state-variable-filtered data
-    [y/C, ..., s^n y/C, u/C, ..., s^m u/C] and K(k) = [1, k, ..., k^N], is a polynomial
-    in k; the cost
-        J(k, t) = 1/2 e^(-beta t) S0 (k - k0)^2 + 1/2 int_0^t e^(-beta (t - tau)) g^2 dtau
-    is tracked at its stationary point k^ by the ODE (Nihtila, 1983)
-        dk^/dt = -h_1 / J_2,   dJ_i/dt = -beta J_i + h_i + J_(i+1) dk^/dt  (i = 2..2N),
-    with h_i = 1/2 d^i(g^2)/dk^i, J_(2N+1) = 0, k^(0) = k0, J_2(0) = S0, other states 0.
-    The filter states, k^ and J_2..J_2N are integrated together by scipy's
-    adaptive Runge-Kutta solver `method` (RK23, as the paper's ode23) with tolerances rtol
-    and atol on every state; max_step bounds its step (pass the sampling interval if the
-    input has features shorter than the solver's steps). Between samples the output is
-    interpolated linearly, and so is the input (hold="linear") unless it was held
-    (hold="zoh", as from a digital-to-analogue converter).
-
-    C is the filter (see `filter_polynomial`): None for (1 + s)^(n+1), a time constant T
-    for (1 + sT)^(n+1), or coefficients, highest power first. progress, if given, is
-    called with the time reached after every solver step. If J_2 reaches zero (k^ has
-    left the region where the cost is convex), the run stops there and the result says
-    so; it never holds NaN.
-    """
-    t, u, y = _signals(("t", t), ("u", u), ("y", y), minimum=2)
-    k0 = _real("k0", k0)
-    beta = _positive("beta", beta, allow_zero=True)
-    S0 = _positive("S0", S0)
-    rtol, atol = _positive("rtol", rtol), _positive("atol", atol)
-    if not max_step > 0:
-        raise ValueError(f"max_step must be > 0, not {max_step}")
-    _choice("hold", hold, HOLDS)
-    _choice("method", method, METHODS)
-    rhs, size, khat = _right_hand_side(theta(**known), filter_polynomial(C), beta, t, u, y, hold)
+def _integrate(Theta, c, t, u, y, *, k0, beta, S0, hold, method, rtol, atol, max_step, progress):
+    """The ODE's k^ and J_2..J_2N at the sample times reached, and (when, why) it stopped."""
+    rhs, size, khat = _right_hand_side(Theta, c, beta, t, u, y, hold)
     x0 = np.zeros(size)
     x0[khat], x0[khat + 1] = k0, S0
     solver = getattr(integrate, method)(
@@ -428,11 +1192,7 @@ def estimate(
             stop = (solver.t, f"the integrator failed at t = {solver.t:.6g}: {failure}")
         elif not (solver.y[khat + 1] > 0 and np.isfinite(solver.y).all()):
             crossing = _zero_crossing(solver, khat + 1)
-            stop = (
-                crossing,
-                f"J_2 reached zero at t = {crossing:.6g}: the estimate left the region where "
-                "the cost is convex in k, so the run stopped there",
-            )
+            stop = (crossing, _convexity_lost(crossing))
         # record the samples this step covered (before the stop, if there is one)
         upto = bisect_right(times, solver.t) if stop is None else bisect_left(times, stop[0])
         if upto == done + 1 and times[done] == solver.t:  # the usual case: one, at the end
@@ -444,14 +1204,7 @@ def estimate(
             break
         if progress is not None:
             progress(solver.t)
-    return Estimate(
-        t=t[:done],
-        khat=track[:done, 0],
-        J=track[:done, 1:].T,
-        ok=stop is None,
-        message=f"reached t = {t[-1]:.6g}" if stop is None else stop[1],
-        stopped_at=None if stop is None else float(stop[0]),
-    )
+    return t[:done], track[:done, 0], track[:done, 1:].T, stop
 
 
 def _zero_crossing(solver, index: int) -> float:
@@ -460,6 +1213,166 @@ def _zero_crossing(solver, index: int) -> float:
         return solver.t_old
     dense = solver.dense_output()
     return optimize.brentq(lambda time: dense(time)[index], solver.t_old, solver.t)
+
+
+def _convexity_lost(time: float) -> str:
+    return (
+        f"J_2 reached zero at t = {time:.6g}: the estimate left the region where the cost "
+        "is convex in k, so the run stopped there"
+    )
+
+
+# The batch fit: the whole record's cost, minimised globally -----------------------------------
+
+
+@dataclass(frozen=True)
+class Fit:
+    """The least-squares fit of k to a whole record: no starting value, no prior.
+
+    k: the global minimiser of J within `bounds` (NaN when J has none: then ok is False and
+    `message` says why); minima: every local minimum of J within the bounds, ascending;
+    coefficients: J(k) = sum_p coefficients[p] k^p, where
+        J(k) = 1/2 int_t0^T e^(-beta (T - tau)) g(tau, k)^2 dtau
+    with g(t, k) = X(t)^T Theta K(k) as in `estimate`; informed_until: as in `Estimate`.
+    """
+
+    k: float
+    minima: np.ndarray
+    coefficients: np.ndarray
+    bounds: tuple[float, float]
+    ok: bool
+    message: str
+    informed_until: float | None
+
+    def cost(self, k):
+        """J(k) for scalar or array k."""
+        return _value(self.coefficients, np.asarray(k, dtype=float))
+
+
+def fit(t, u, y, *, C=None, beta: float = 0.0, bounds=None, hold: str = "linear", **known) -> Fit:
+    """Fit k to samples of input u and output y at times t: the global minimiser of J.
+
+    J(k) is the cost of `estimate` at the last sample, without its prior: computed exactly
+    for the hold from the filter's moments, as a polynomial in k, and minimised over the
+    real line or within bounds=(lo, hi). beta >= 0 weighs recent data more (0: all
+    alike). Intervals whose data are rounding noise add nothing (see `estimate`).
+    """
+    t, u, y = _signals(("t", t), ("u", u), ("y", y), minimum=2)
+    beta = _positive("beta", beta, allow_zero=True)
+    _choice("hold", hold, HOLDS)
+    bounds = _bounds(bounds)
+    setup = _Setup.of(theta(**known), filter_polynomial(C), beta, hold)
+    steps = _Steps.of(t)
+    chunk = BLOCK if steps.index is None else 2048
+    if steps.index is None:
+        maps = setup.maps(steps.values)
+    coefficients = np.zeros(2 * N + 1)
+    z = np.zeros(2 * setup.A.shape[0])
+    informed = t[0]
+    for lo in range(0, t.size - 1, chunk):
+        hi = min(t.size, lo + chunk + 1)  # samples lo..hi-1, intervals lo..hi-2
+        index = None
+        if steps.index is not None:  # the maps of this chunk's steps only
+            which, index = np.unique(steps.index[lo : hi - 1], return_inverse=True)
+            maps = setup.maps(steps.values[which])
+        rows = _moments_input(z, y[lo:hi], u[lo:hi], maps, index)
+        z = rows[-1, : z.size]
+        quiet = setup.quiet(rows[:, : z.size], steps.values if index is None else np.diff(t[lo:hi]))
+        V = rows[:-1]
+        if beta == 0 and not quiet.any():
+            weight = None
+        else:
+            weight = np.where(quiet, 0.0, np.exp(-beta * (t[-1] - t[lo + 1 : hi])))
+        if index is None:  # one weighted Gram matrix of the intervals' vectors
+            root = V if weight is None else np.sqrt(weight)[:, None] * V
+            coefficients += np.einsum("pde,de->p", maps[2][0], root.T @ root)
+        else:
+            costs = _interval_costs(V, maps[2], index)
+            coefficients += costs.sum(0) if weight is None else weight @ costs
+        if not quiet.all():
+            informed = t[lo + 1 + np.flatnonzero(~quiet)[-1]]
+    coefficients[0], coefficients[-1] = max(coefficients[0], 0.0), max(coefficients[-1], 0.0)
+    best = float(_global_minimisers(coefficients, 0.0, bounds)[0])
+    minima = _local_minima(coefficients, 0.0)
+    minima = minima[(minima >= bounds[0]) & (minima <= bounds[1])]
+    informed_until = None if informed >= t[-1] else float(informed)
+    if not np.isnan(best):
+        message = f"the global minimum of J over the record, t = {t[0]:.6g} to {t[-1]:.6g}"
+    elif not (coefficients[1:] != 0).any():
+        message = f"J does not depend on k: the data carry no information about {UNKNOWN}"
+    else:
+        message = "J decreases without bound: bound the search with bounds=(lo, hi)"
+    return Fit(best, minima, coefficients, bounds, not np.isnan(best), message, informed_until)
+
+
+# Streaming: the estimate of a live data stream ------------------------------------------------
+
+
+class Tracker:
+    """k^ of a data stream, updated one sample or one chunk at a time.
+
+    The algorithm of `estimate` (engine="moments"), with its state kept between updates:
+    feeding a record in chunks of any sizes gives the k^ and global_k that one `estimate`
+    call gives at the chunks' ends. The state has a fixed size, so a stream may run for
+    ever, and a Tracker pickles, so a long-running process can checkpoint it.
+
+        tracker = Tracker(k0=1.0)
+        for t, u, y in stream:
+            k = tracker.update(t, u, y)
+    """
+
+    def __init__(self, *, k0, beta=0.1, S0=1e-4, C=None, hold="linear", bounds=None, **known):
+        k0 = _real("k0", k0)
+        beta = _positive("beta", beta, allow_zero=True)
+        S0 = _positive("S0", S0)
+        _choice("hold", hold, HOLDS)
+        self.bounds = _bounds(bounds)
+        self._run = _Run(_Setup.of(theta(**known), filter_polynomial(C), beta, hold), k0, S0)
+        self._global = None
+
+    def update(self, t, u, y) -> float:
+        """Take the next sample(s) (numbers, or equal-length arrays, after the last) and
+        return the current estimate k^."""
+        arrays = _signals(("t", t), ("u", u), ("y", y), minimum=1, after=self._run.t)
+        self._run.advance(*arrays)
+        self._global = None
+        return self.k
+
+    @property
+    def k(self) -> float:
+        """The current estimate k^ (frozen where the run stopped, see `ok`)."""
+        return float(self._run.khat)
+
+    @property
+    def t(self) -> float | None:
+        """The last sample's time (None before the first)."""
+        return None if self._run.t == -math.inf else float(self._run.t)
+
+    @property
+    def global_k(self) -> float:
+        """The global minimiser of the current cost J(., t) within the bounds."""
+        if self._global is None:
+            run = self._run
+            self._global = float(_global_minimisers(run.taylor, run.khat, self.bounds)[0])
+        return self._global
+
+    @property
+    def ok(self) -> bool:
+        """False once J_2 reached zero along k^ (the estimate then stays where it was)."""
+        return self._run.ok
+
+    @property
+    def stopped_at(self) -> float | None:
+        return self._run.stopped_at
+
+    @property
+    def informed_until(self) -> float | None:
+        """The time after which the data were rounding noise (None: informative to now)."""
+        run = self._run
+        return None if run.informed >= run.t else float(run.informed)
+
+
+# From the command line: python THIS_FILE data.csv --k0 V [V ...] -----------------------------
 
 
 def read_csv(path, columns: tuple[str, ...] = ("t", "u", "y")) -> tuple[np.ndarray, ...]:
@@ -508,9 +1421,13 @@ def main(argv: list[str] | None = None) -> int:
         "--filter", type=float, nargs="+", metavar="C", help="C(s) coefficients, highest first"
     )
     parser.add_argument("--hold", choices=HOLDS, default="linear", help="input interpolation")
-    parser.add_argument("--method", choices=METHODS, default="RK23", help="the solver")
-    parser.add_argument("--rtol", type=float, default=1e-6, help="relative tolerance")
-    parser.add_argument("--atol", type=float, default=1e-9, help="absolute tolerance")
+    parser.add_argument("--engine", choices=ENGINES, default="moments", help="the algorithm")
+    parser.add_argument(
+        "--bounds", type=float, nargs=2, metavar=("LO", "HI"), help="global search interval"
+    )
+    parser.add_argument("--method", choices=METHODS, default="RK23", help="the ODE's solver")
+    parser.add_argument("--rtol", type=float, default=1e-6, help="the ODE's relative tolerance")
+    parser.add_argument("--atol", type=float, default=1e-9, help="the ODE's absolute tolerance")
     parser.add_argument(
         "--set", action="append", default=[], metavar="NAME=VALUE", help="a known parameter"
     )
@@ -520,27 +1437,32 @@ def main(argv: list[str] | None = None) -> int:
     try:
         known = dict(_assignment(text) for text in args.set)
         t, u, y = read_csv(args.data)
-        options = dict(beta=args.beta, S0=args.S0, C=C, hold=args.hold, method=args.method)
-        tolerances = dict(rtol=args.rtol, atol=args.atol)
-        runs = [estimate(t, u, y, k0=k0, **options, **tolerances, **known) for k0 in args.k0]
+        options = dict(beta=args.beta, S0=args.S0, C=C, hold=args.hold, engine=args.engine,
+                       bounds=args.bounds, method=args.method, rtol=args.rtol, atol=args.atol)  # fmt: skip
+        runs = [estimate(t, u, y, k0=k0, **options, **known) for k0 in args.k0]
     except (OSError, ValueError) as error:
         print(f"{parser.prog}: error: {error}", file=sys.stderr)
         return 2
     records = [
-        dict(k0=k0, k=run.k, minima=run.minima().tolist(), ok=run.ok, message=run.message)
+        dict(k0=k0, k=run.k, global_k=float(run.global_k[-1]), minima=run.minima().tolist(),
+             ok=run.ok, message=run.message)  # fmt: skip
         for k0, run in zip(args.k0, runs, strict=True)
     ]
     if args.json:
         print(json.dumps(dict(model=MODEL, unknown=UNKNOWN, runs=records)))
         return 0
-    for record in records:
+    for record, run in zip(records, runs, strict=True):
         minima = ", ".join(f"{value:.6g}" for value in record["minima"])
-        print(f"k0 = {record['k0']:g}: {UNKNOWN} = {record['k']:.6g} (local minima of J: {minima})")
-        if not record["ok"]:
+        print(
+            f"k0 = {record['k0']:g}: {UNKNOWN} = {record['k']:.6g}, global minimum at "
+            f"{record['global_k']:.6g} (local minima of J: {minima})"
+        )
+        if not record["ok"] or run.informed_until is not None:
             print(f"  {record['message']}")
     return 0
 
 
 if __name__ == "__main__":
     sys.exit(main())
+
 
