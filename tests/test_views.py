@@ -171,3 +171,19 @@ def test_signals_of_modulated_sources_are_drawn_as_dashed_arrows():
     (ax,) = draw.figure(graph).axes
     arrows = [child for child in ax.texts if getattr(child, "arrow_patch", None) is not None]
     assert len(arrows) == 6
+
+
+def test_subsystems_are_boxes_around_their_components_named_as_in_their_file():
+    graph = load(mtt.example("absorber_stages"))  # three stages from one stage file
+    position = draw.layout(graph)
+    half = {name: np.array([0.2, 0.1]) for name in position}
+    boxes = draw.subsystem_boxes(graph, position, half)
+    assert list(boxes) == ["s1", "s2", "s3"]
+    for name, (lower, upper) in boxes.items():
+        members = [n for n in position if n.startswith(name + ".")]
+        assert len(members) == 6  # 0:x, C:h, 1:down, 1:up, MSf:liquid, MSf:gas
+        assert all((lower < position[n]).all() and (position[n] < upper).all() for n in members)
+    assert draw._local_label(graph, "s2.x") == "0:x"
+    assert draw._local_label(graph, "feed") == "Sf:feed"
+    svg = draw.render(draw.figure(graph), "svg").decode()
+    assert ">s1</text>" in svg and ">MSf:liquid</text>" in svg

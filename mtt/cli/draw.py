@@ -21,6 +21,7 @@ import networkx as nx
 import numpy as np
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
+from matplotlib.patches import FancyBboxPatch
 
 from mtt.derivation.causality import CausalBondGraph
 from mtt.estimator.codegen import write_atomic
@@ -32,6 +33,8 @@ TICK = 0.09  # half-arrow barb and causal stroke, in layout units
 GAP = 0.07  # between a label and the bonds that end at it
 KAMADA_KAWAI_NODES = 150  # above, Kamada-Kawai takes seconds (20 s at 400 components)
 MAX_INCHES = 60.0  # a side of the picture
+CROSSING = 2.0  # the layout length of a bond into or out of a subsystem (others: 1)
+BOX_PAD, BOX_FILL = 0.06, "#f3f3f3"  # a subsystem's box around its labels
 INK, NUMBER_INK, SIGNAL_INK = "#1a1a1a", "#7a7a7a", "#b04a1a"
 ROLE_INK = {Role.SOURCE: "#1f5fa8", Role.DETECTOR: "#1f5fa8", Role.JUNCTION: "#1a1a1a"}
 
@@ -41,8 +44,10 @@ def layout(graph: BondGraph) -> dict[str, np.ndarray]:
     simple = nx.Graph(graph.graph.to_undirected())
     if simple.number_of_nodes() == 1:
         return {next(iter(simple)): np.zeros(2)}
+    for a, b, data in simple.edges(data=True):  # a bond across a subsystem's box is longer
+        data["length"] = 1.0 if _owner(graph, a) == _owner(graph, b) else CROSSING
     if simple.number_of_nodes() <= KAMADA_KAWAI_NODES:
-        position = nx.kamada_kawai_layout(simple)
+        position = nx.kamada_kawai_layout(simple, weight="length")
     else:  # the layers of distance from the input, relaxed: long chains meander, unknotted
         start = nx.bfs_layout(simple, start=graph.input) if nx.is_connected(simple) else None
         position = nx.spring_layout(simple, pos=start, seed=0, iterations=50)
@@ -54,6 +59,12 @@ def layout(graph: BondGraph) -> dict[str, np.ndarray]:
     lengths = [np.linalg.norm(points[i] - points[j]) for i, j in _index_pairs(simple, position)]
     points *= BOND_LENGTH / (np.median(lengths) if lengths else 1.0)
     return dict(zip(position, points, strict=True))
+
+
+def _owner(graph: BondGraph, name: str) -> str:
+    """The innermost subsystem a component belongs to ("" for the model itself)."""
+    owners = [s.name for s in graph.subsystems if name.startswith(s.name + ".")]
+    return max(owners, key=len, default="")
 
 
 def _index_pairs(simple: nx.Graph, position: dict) -> list[tuple[int, int]]:
@@ -116,8 +127,9 @@ def figure(graph: BondGraph, causal: CausalBondGraph | None = None) -> Figure:
     for component in graph.components:
         ink = ROLE_INK.get(component.type.role, INK)
         x, y = position[component.name]
+        label = _local_label(graph, component.name)
         labels[component.name] = ax.text(
-            x, y, component.label, ha="center", va="center", fontsize=10, color=ink,
+            x, y, label, ha="center", va="center", fontsize=10, color=ink,
             bbox={"boxstyle": "square,pad=0.15", "facecolor": "white", "edgecolor": "none"},
             zorder=3,
         )  # fmt: skip
@@ -127,6 +139,21 @@ def figure(graph: BondGraph, causal: CausalBondGraph | None = None) -> Figure:
     for name, text in labels.items():
         box = text.get_window_extent().transformed(to_data)
         half[name] = np.array([box.width, box.height]) / 2 + GAP
+    for name, (lower, upper) in subsystem_boxes(graph, position, half).items():
+        ax.add_patch(
+            FancyBboxPatch(
+                lower,
+                *(upper - lower),
+                boxstyle="round,pad=0,rounding_size=0.08",
+                facecolor=BOX_FILL,
+                edgecolor=NUMBER_INK,
+                linestyle=(0, (5, 3)),
+                lw=0.9,
+                zorder=0,
+            )
+        )
+        ax.text(lower[0] + 0.06, upper[1] - 0.05, name, ha="left", va="top", fontsize=8,
+                color=NUMBER_INK, zorder=1)  # fmt: skip
     title = graph.name + (f": {graph.description}" if graph.description else "")
     ax.text(low[0] + 0.05, high[1] - 0.05, title, ha="left", va="top", fontsize=9,
             color=NUMBER_INK)  # fmt: skip
@@ -141,6 +168,34 @@ def figure(graph: BondGraph, causal: CausalBondGraph | None = None) -> Figure:
             "arrowstyle": "-|>", "linestyle": (0, (4, 3)), "color": SIGNAL_INK,
             "shrinkA": 0, "shrinkB": 0, "lw": 1.0, "connectionstyle": "arc3,rad=0.25"})  # fmt: skip
     return fig
+
+
+def _local_label(graph: BondGraph, name: str) -> str:
+    """TYPE:NAME, the name as its subsystem's file writes it (the box gives the rest)."""
+    component = graph.component(name)
+    owner = _owner(graph, name)
+    return f"{component.type.name}:{name[len(owner) + 1 :] if owner else name}"
+
+
+def subsystem_boxes(graph: BondGraph, position: dict, half: dict) -> dict[str, tuple]:
+    """Each subsystem's box (lower-left, upper-right corners) around the labels of its
+    components and the boxes of its own subsystems, with room for its name at the top."""
+    boxes: dict[str, tuple] = {}
+    for subsystem in sorted(graph.subsystems, key=lambda s: -s.name.count(".")):
+        corners = [
+            (position[name] - half[name], position[name] + half[name])
+            for name in position
+            if _owner(graph, name) == subsystem.name
+        ]
+        corners += [
+            box for inner, box in boxes.items() if inner.rpartition(".")[0] == subsystem.name
+        ]
+        if not corners:
+            continue
+        lower = np.min([c[0] for c in corners], axis=0) - BOX_PAD
+        upper = np.max([c[1] for c in corners], axis=0) + BOX_PAD + np.array([0.0, 0.16])
+        boxes[subsystem.name] = (lower, upper)
+    return dict(sorted(boxes.items()))
 
 
 def signals(graph: BondGraph) -> list[tuple[str, str]]:
