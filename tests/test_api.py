@@ -5,7 +5,6 @@ from __future__ import annotations
 import json
 import subprocess
 import sys
-import types
 
 import numpy as np
 import pytest
@@ -183,15 +182,16 @@ def test_estimator_simulate_and_estimate_delegate_to_the_generated_module(dc_dri
     assert error.kind == "bad_argument" and "k0" in str(error)
 
 
-def test_fit_delegates_to_the_generated_module(monkeypatch):
-    model = mtt.load(RC)
-    calls = []
-    fake = types.SimpleNamespace(fit=lambda *args, **options: calls.append((args, options)))
-    model.__dict__["_estimator"] = fake  # the cached module
-    model.fit(1, 2, 3, k0=4)
-    assert calls == [((1, 2, 3), {"k0": 4})]
-    model.__dict__["_estimator"] = types.SimpleNamespace()
-    assert kind_of(model.fit, 1, 2, 3).kind == "unsupported"
+def test_fit_finds_the_paper_value_from_the_whole_record(dc_drive):
+    t = np.linspace(0.0, 10.0, 1001)
+    u = np.ones_like(t)
+    y = dc_drive.simulate(t, u, k=10)
+    result = dc_drive.fit(t, u, y)
+    assert result.ok and result.k == pytest.approx(10.0, abs=1e-4)
+    noisy = y + np.random.default_rng(0).uniform(-0.02, 0.02, t.size)
+    assert dc_drive.fit(t, u, noisy).k == pytest.approx(10.0, abs=0.1)
+    error = kind_of(dc_drive.fit, t, u, y, beta=-1)
+    assert error.kind == "bad_argument" and "beta" in str(error)
 
 
 # errors --------------------------------------------------------------------------------

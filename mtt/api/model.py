@@ -284,14 +284,9 @@ class Model:
         return _delegate(self._estimator.estimate, t, u, y, **options)
 
     def fit(self, t, u, y, **options):
-        """The generated module's `fit(t, u, y, ...)`: a batch fit of the unknown."""
-        fit = getattr(self._estimator, "fit", None)
-        if fit is None:
-            raise MttError(
-                "this mtt's estimator has no fit yet: use estimate(t, u, y, k0=...)",
-                kind="unsupported",
-            )
-        return _delegate(fit, t, u, y, **options)
+        """The generated module's batch `fit(t, u, y, *, C, beta, bounds, ...)` -> Fit: the
+        global minimiser of the whole record's cost, no starting value needed."""
+        return _delegate(self._estimator.fit, t, u, y, **options)
 
 
 def _delegate(function, *args, **options):
