@@ -14,6 +14,7 @@ unknown and the kept symbols.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import cache
 
 import networkx as nx
 import sympy
@@ -147,6 +148,19 @@ def _outputs(causal: CausalBondGraph, component: Component, v: PortVariables) ->
     return names
 
 
+def _times(a, b, K: Domain):
+    """a * b, without the general product (and its gcd) when one factor is 1 or -1."""
+    if a == K.one:
+        return b
+    if b == K.one:
+        return a
+    if a == -K.one:
+        return -b
+    if b == -K.one:
+        return -a
+    return a * b
+
+
 def _solve(
     rows: list[dict], unknowns: list[str], K: Domain
 ) -> tuple[dict[str, Form], list[str], list[Form]]:
@@ -155,27 +169,42 @@ def _solve(
     Returns the solved unknowns, each in terms of the other variables and of the unknowns
     left free; the unknowns left free (a parameter of zero, say, or a degenerate algebraic
     loop, keeps the rows from determining them); and the rows that remain as constraints.
+    This is the reduced row echelon form with the unknowns' columns first (unique, so any
+    pivot row will do: one with a coefficient of 1 or -1 spares divisions).
     """
     others = sorted({name for row in rows for name in row} - set(unknowns))
-    columns = unknowns + others
-    matrix = DomainMatrix(
-        [[K.convert(row.get(name, K.zero)) for name in columns] for row in rows],
-        (len(rows), len(columns)),
-        K,
-    )
-    reduced, pivots = matrix.rref()
+    rows = [{name: c for name, c in row.items() if c != K.zero} for row in rows]
+    free_rows = list(range(len(rows)))
+    pivots: list[tuple[int, str]] = []
+    for column in unknowns + others:
+        candidates = [i for i in free_rows if column in rows[i]]
+        if not candidates:
+            continue
+        i = next((i for i in candidates if rows[i][column] in (K.one, -K.one)), candidates[0])
+        free_rows.remove(i)
+        scale = rows[i][column]
+        if scale != K.one:
+            inverse = -K.one if scale == -K.one else K.one / scale
+            rows[i] = {name: _times(c, inverse, K) for name, c in rows[i].items()}
+        for j, row in enumerate(rows):
+            factor = row.get(column)
+            if j == i or factor is None:
+                continue
+            for name, c in rows[i].items():
+                value = row.get(name, K.zero) - _times(factor, c, K)
+                if value == K.zero:
+                    row.pop(name, None)
+                else:
+                    row[name] = value
+        pivots.append((i, column))
     solved: dict[str, Form] = {}
     constraints: list[Form] = []
-    for i, pivot in enumerate(pivots):
-        form = {
-            name: reduced[i, j].element
-            for j, name in enumerate(columns)
-            if j != pivot and reduced[i, j].element != K.zero
-        }
-        if pivot < len(unknowns):
-            solved[columns[pivot]] = {name: -c for name, c in form.items()}
+    for i, column in sorted(pivots, key=lambda p: (unknowns + others).index(p[1])):
+        form = {name: c for name, c in rows[i].items() if name != column}
+        if column in unknowns:
+            solved[column] = {name: -c for name, c in form.items()}
         else:
-            constraints.append({columns[pivot]: K.one, **form})
+            constraints.append({column: K.one, **form})
     free = [u for u in unknowns if u not in solved]
     return solved, free, constraints
 
@@ -198,11 +227,10 @@ def derive(causal: CausalBondGraph, parametrisation: Parametrisation) -> Equatio
     extra: list[str] = []
     constraints: list[Form] = []
     storage = [c for c in graph.components if c.type.role is Role.STORAGE]
+    convert = cache(K.from_sympy)  # most coefficients are 1, -1 and a few parameter values
     for component in graph.components:
         v = _port_variables(causal, component, values.get(component.name), signals[component.name])
-        rows = [
-            {name: K.from_sympy(c) for name, c in row.items()} for row in component.type.relation(v)
-        ]
+        rows = [{name: convert(c) for name, c in row.items()} for row in component.type.relation(v)]
         solved, free, left = _solve(rows, _outputs(causal, component, v), K)
         explicit.update(solved)
         extra += free
@@ -223,7 +251,8 @@ def _substitute(form: Form, resolved: dict[str, Form], K: Domain, skip=frozenset
         if w in skip:
             continue
         for base, cb in resolved.get(w, {w: K.one}).items():
-            total[base] = total.get(base, K.zero) + c * cb
+            term = _times(c, cb, K)
+            total[base] = total[base] + term if base in total else term
     return {b: c for b, c in total.items() if c != K.zero}
 
 

@@ -60,25 +60,52 @@ def _singular(equations: Equations, why: str) -> ModelError:
 
 
 def transfer_function(equations: Equations) -> TransferFunction:
-    """G(s) = C (sE - A)^-1 B + D; raise `ModelError` (singular_model) if it does not exist."""
+    """G(s) = C (sE - A)^-1 B + D; raise `ModelError` (singular_model) if it does not exist.
+
+    G = det([[sE - A, B], [-C, D]]) / det(sE - A), both determinants exact by evaluation
+    and interpolation (`determinants`); when that would need too many points (many kept
+    symbols), by a fraction-free solve over the polynomials instead.
+    """
+    from mtt.derivation.determinants import bordered_determinants  # numpy: not for `check`
+
     F, gens = _field(equations)
-    lift = lambda M: M.convert_to(F)  # noqa: E731
-    C, D = lift(equations.C), lift(equations.D)[0, 0].element
+    lift = lambda M: M.to_sparse().convert_to(F)  # noqa: E731
+    D = lift(equations.D)[0, 0].element
     G = D
     size = len(equations.states)
     if size:
         pencil = lift(equations.E) * F.from_sympy(LAPLACE) - lift(equations.A)
-        _, cleared = pencil.hstack(lift(equations.B)).clear_denoms_rowwise(convert=True)
-        M, B = cleared[:, :size], cleared[:, size:]
-        if M.rank() < size:
-            raise _singular(equations, ": det(sE - A) is identically zero")
-        xnum, den = M.solve_den(B)
-        x = xnum.convert_to(F)
-        CX = sum((C[0, j].element * x[j, 0].element for j in range(size)), F.zero)
-        G = CX / F.convert_from(den, M.domain) + D
+        bordered = pencil.hstack(lift(equations.B)).vstack(
+            (-lift(equations.C)).hstack(lift(equations.D))
+        )
+        denominators, cleared = bordered.clear_denoms_rowwise(convert=True)
+        ring = cleared.domain
+        entries = cleared.to_dok()
+        determinants = bordered_determinants(entries, size + 1, ring.ring)
+        if determinants is None:
+            G = _solve(equations, F, pencil, lift(equations.B), lift(equations.C)) + D
+        else:
+            leading, full = determinants
+            if not leading:
+                raise _singular(equations, ": det(sE - A) is identically zero")
+            last = F.convert(denominators.to_dok()[size, size])  # the last row's multiplier
+            G = F.convert_from(full, ring) / (F.convert_from(leading, ring) * last)
     if any(not isinstance(g, sympy.Symbol) for g in gens):
         G = _evaluate_constants(equations, F, G)
     return _canonical(equations, gens, G)
+
+
+def _solve(equations: Equations, F, pencil, B, C):
+    """C (sE - A)^-1 B by a fraction-free solve over the polynomials in s and the symbols."""
+    size = len(equations.states)
+    _, cleared = pencil.hstack(B).clear_denoms_rowwise(convert=True)
+    M, B = cleared[:, :size], cleared[:, size:]
+    if M.rank() < size:
+        raise _singular(equations, ": det(sE - A) is identically zero")
+    xnum, den = M.solve_den(B)
+    x = xnum.convert_to(F)
+    CX = sum((C[0, j].element * x[j, 0].element for j in range(size)), F.zero)
+    return CX / F.convert_from(den, M.domain)
 
 
 def _evaluate_constants(equations: Equations, F, G):
