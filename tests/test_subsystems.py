@@ -161,6 +161,24 @@ def test_check_json_counts_the_assembled_model(capsys):
     assert record["parameters"]["s3.c"] == "k" and record["unknown"] == ["k"]
 
 
+def test_the_specification_examples(tmp_path):
+    # `1:a -> motor.shaft` (the parent's bond into the port: the motor's own bond points
+    # out of SS:shaft) and `input Se:motor.v`, a source of the subsystem, with a dotted name
+    model = write(tmp_path, {
+        "top.bg": 'model top\nsubsystem motor = "motor.bg" (r = 2)\nSe:u -> 1:a -> motor.shaft\n'
+                  "1:a -> Df:i\ninput Se:motor.v\n",
+        "motor.bg": "model motor\nparam r = 1\nSe:v -> 1:m\nSS:shaft -> 1:m\n1:m -> R:r\n",
+    })  # fmt: skip
+    graph = load(model)
+    assert (graph.input, graph.output) == ("motor.v", "i")
+    # one current i in both loops; with u = 0 the shaft's effort is 0, so v = r i
+    tf = transfer_for(model)
+    assert (tf.numerator, tf.denominator) == (1, 2)
+    # with v = 0 instead, u reaches the resistor through the shaft: u = r i
+    tf = transfer_for(model, ParameterChoice(input="Se:u"))
+    assert (tf.numerator, tf.denominator) == (1, 2)
+
+
 # --- errors, at their file, line and column ----------------------------------------------
 
 
@@ -328,8 +346,10 @@ def test_nesting_and_instances_are_bounded(tmp_path, monkeypatch):
     files["f12.bg"] = "model f12\nSS:p -> C:c(1)\n"
     model = write(tmp_path, files)
     monkeypatch.setattr(subsystems, "MAX_INSTANCES", 100)
-    kinds = {p[3] for p in places(failure(model), tmp_path)}
-    assert kinds == {"too_large"}
+    found = places(failure(model), tmp_path)
+    assert {p[3] for p in found} == {"too_large"}
+    file, line, column, _, notes = found[0]  # at the subsystem statement that goes too far
+    assert (line, column) in ((2, 11), (3, 11)) and file.startswith("f") and notes
     monkeypatch.setattr(subsystems, "MAX_INSTANCES", 10_000)
     monkeypatch.setattr(subsystems, "MAX_DEPTH", 5)
     kinds = {p[3] for p in places(failure(model), tmp_path)}
