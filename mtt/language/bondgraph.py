@@ -18,9 +18,10 @@ from types import MappingProxyType
 import networkx as nx
 import sympy
 
-from mtt.language.checks import Component, FileCheck, Parameter
+from mtt.language.checks import FileCheck
 from mtt.language.components import LIBRARY, PortRule, Role
 from mtt.language.diagnostics import Diagnostic, ModelError, Severity, Source, error
+from mtt.language.elements import Component, Parameter
 from mtt.language.flatten import Assembly, Bond, assemble
 from mtt.language.parse import ParsedModel, PortDecl
 from mtt.language.subsystems import Instance, load_tree

@@ -11,66 +11,17 @@ checked once the files are assembled (see `bondgraph`).
 from __future__ import annotations
 
 from collections import Counter
-from dataclasses import dataclass
-from functools import cached_property
 
 import networkx as nx
 import sympy
 
 from mtt.language.components import LIBRARY, ComponentType, PortRule, Role
 from mtt.language.diagnostics import Diagnostic, Origin, Position, error, warning
-from mtt.language.expressions import RESERVED, SIGNALS, Expression, NameUse, SignalUse
+from mtt.language.elements import Component, LocalBond, Parameter, signal_readable, unreadable
+from mtt.language.expressions import RESERVED, Expression, NameUse
 from mtt.language.parse import ComponentUse, ParsedModel, PortUse
+from mtt.language.ports import SubsystemRules
 from mtt.language.subsystems import Instance
-
-
-@dataclass(frozen=True)
-class Parameter:
-    name: str
-    value: Expression | None
-    description: str | None
-    declared_unknown: bool
-    position: Position
-
-
-@dataclass(frozen=True)
-class Component:
-    name: str
-    type: ComponentType
-    argument: Expression | None  # explicit, or the parameter of the same name
-    position: Position  # first mention
-    description: str | None
-
-    @property
-    def label(self) -> str:
-        return f"{self.type.name}:{self.name}"
-
-
-@dataclass(frozen=True)
-class LocalBond:
-    """A bond of one file, between its components or its subsystems' ports."""
-
-    tail: str  # a component's name, or `sub.port`
-    head: str
-    position: Position
-
-
-def signal_readable(kind: str, target: ComponentType) -> bool:
-    """e(X) reads a 0-junction's common effort or a one-port's; f(X) a 1-junction's flow."""
-    junction = "0" if kind == "e" else "1"
-    return target.name == junction or target.ports is PortRule.ONE
-
-
-def unreadable(use: SignalUse, target: ComponentType) -> str:
-    """Why a signal cannot be read from a component of this type."""
-    variable = SIGNALS[use.kind]
-    if target.role is Role.JUNCTION:
-        other = "f" if use.kind == "e" else "e"
-        return (
-            f"{use.text}: a {target.summary} has no common {variable}; "
-            f"read {other}({use.target}) or the {variable} of one of its one-ports"
-        )
-    return f"{use.text}: a {target.summary} has two {variable}s; read the junction beside it"
 
 
 def _article(noun: str) -> str:
@@ -82,7 +33,7 @@ def _implied_argument(use: ComponentUse) -> Expression:
     return Expression(sympy.Symbol(use.name), (NameUse(use.name, use.position),), use.position)
 
 
-class FileCheck:
+class FileCheck(SubsystemRules):
     """Checks one instance of a file; each method checks one rule of the language.
 
     `children` are its subsystems' checks (those that could be read), for the rules that
@@ -225,49 +176,6 @@ class FileCheck:
         else:
             seen[use.name] = use.argument.position
 
-    def check_subsystems(self) -> None:
-        """Subsystem names (in the components' name space), and each binding."""
-        seen: dict[str, Position] = {}
-        for decl in self.parsed.subsystems:
-            other = seen.get(decl.name)
-            component = self.components.get(decl.name)
-            if other is None and component is not None:
-                if component.position < decl.position:
-                    other = component.position
-                else:
-                    self.report(
-                        "duplicate_name",
-                        f"{component.label}: the name is already used on line "
-                        f"{decl.position.line} by a subsystem",
-                        component.position,
-                    )
-            if other is not None:
-                self.report(
-                    "duplicate_name",
-                    f"subsystem {decl.name!r}: the name is already used on line {other.line}",
-                    decl.position,
-                )
-                continue
-            seen[decl.name] = decl.position
-            child = self.children.get(decl.name)
-            bound: dict[str, Position] = {}
-            for binding in decl.bindings:
-                if binding.name in bound:
-                    self.report(
-                        "duplicate_argument",
-                        f"subsystem {decl.name}: {binding.name} is already set on line "
-                        f"{bound[binding.name].line}",
-                        binding.position,
-                    )
-                elif child is not None and binding.name not in child.parameters:
-                    self.report(
-                        "undeclared_parameter",
-                        f"subsystem {decl.name}: its file {decl.file} declares no parameter "
-                        f"{binding.name!r}",
-                        binding.position,
-                    )
-                bound.setdefault(binding.name, binding.position)
-
     def _expressions(self) -> list[Expression]:
         """Every expression in this file's scope but the modulated sources' arguments."""
         expressions = [p.value for p in self.parameters.values() if p.value is not None]
@@ -364,10 +272,6 @@ class FileCheck:
         component = self.components.get(end.name)
         return component is not None and component.type.name == end.type
 
-    def _ports(self, subsystem: str) -> dict[str, bool]:
-        child = self.children.get(subsystem)
-        return child.inward if child is not None else {}
-
     def check_bonds(self) -> None:
         inward, outward = Counter(), Counter()
         for bond in self.parsed.bonds:
@@ -401,59 +305,6 @@ class FileCheck:
                     component.position,
                 )
 
-    def check_ports(self) -> None:
-        """Each subsystem port bonded exactly once, in the direction its own bond agrees with."""
-        declared = {d.name: d for d in self.parsed.subsystems}
-        uses: dict[str, list] = {}
-        for bond in self.parsed.bonds:
-            for end, into_port in ((bond.head, True), (bond.tail, False)):
-                if not isinstance(end, PortUse):
-                    continue
-                decl = declared.get(end.subsystem)
-                if decl is None:
-                    self.report(
-                        "undeclared_component",
-                        f"{end.name}: there is no subsystem {end.subsystem!r}",
-                        end.position,
-                    )
-                    continue
-                if end.subsystem not in self.children:  # not read: reported there
-                    continue
-                ports = self._ports(end.subsystem)
-                if end.port not in ports:
-                    names = ", ".join(sorted(ports)) or "none"
-                    self.report(
-                        "bad_port",
-                        f"{end.name}: {decl.file} has no port SS:{end.port} (its ports: {names})",
-                        end.position,
-                    )
-                    continue
-                uses.setdefault(end.name, []).append(end)
-                if ports[end.port] == into_port:
-                    way, must = ("into", "out of") if into_port else ("out of", "into")
-                    self.report(
-                        "port_direction",
-                        f"{end.name}: the subsystem's own bond points {way} SS:{end.port}, so "
-                        f"this bond must point {must} the port",
-                        bond.position,
-                    )
-        for name, child in self.children.items():
-            for port in sorted(child.inward):
-                mentions = uses.get(f"{name}.{port}", [])
-                if not mentions:
-                    self.report(
-                        "unconnected_component",
-                        f"port {name}.{port} of subsystem {name} is not connected to any bond",
-                        declared[name].position,
-                    )
-                elif len(mentions) > 1:
-                    self.report(
-                        "bad_arity",
-                        f"port {name}.{port} is bonded {len(mentions)} times; a port joins "
-                        "exactly one bond",
-                        mentions[0].position,
-                    )
-
     def check_direction(self) -> None:
         degree = Counter(end for b in self.bonds for end in (b.tail, b.head))
         heads = Counter(b.head for b in self.bonds)
@@ -472,15 +323,3 @@ class FileCheck:
                         self.origin,
                     )
                 )
-
-    @cached_property
-    def inward(self) -> dict[str, bool]:
-        """This file's SS ports: does its own bond point into the SS? (Known even when the
-        bond's other end is wrong: that is reported here, not at each use of the port.)"""
-        ports = {n for n, c in self.components.items() if c.type.role is Role.PORT}
-        into = {}
-        for bond in self.parsed.bonds:
-            for end, towards in ((bond.head, True), (bond.tail, False)):
-                if isinstance(end, ComponentUse) and end.type == "SS" and end.name in ports:
-                    into[end.name] = towards
-        return into

@@ -15,9 +15,10 @@ from itertools import count
 
 import sympy
 
-from mtt.language.checks import Component, FileCheck, Parameter, signal_readable, unreadable
+from mtt.language.checks import FileCheck
 from mtt.language.components import Role
 from mtt.language.diagnostics import Diagnostic, Origin, Position, error
+from mtt.language.elements import Component, Parameter, signal_readable, unreadable
 from mtt.language.expressions import SIGNALS, Expression, NameUse, SignalUse
 from mtt.language.subsystems import Instance, relocate
 
