@@ -182,6 +182,17 @@ def _signals(*named: tuple[str, object], minimum: int, after: float = -math.inf)
 
     `after` is the time of a sample already seen (a Tracker's last): t must follow it.
     """
+    if minimum <= 1 and all(isinstance(value, int | float) for _, value in named):
+        arrays = [np.array([float(value)]) for _, value in named]  # one sample, quickly
+        for (name, _), array in zip(named, arrays, strict=True):
+            if not math.isfinite(array[0]):
+                raise ValueError(f"{name}[0] is {array[0]}: every value must be finite")
+        if not arrays[0][0] > after:
+            raise ValueError(
+                f"t must be strictly increasing: t[0] = {arrays[0][0]} follows the last "
+                f"sample's t = {after}"
+            )
+        return arrays
     arrays = [_array(name, value) for name, value in named]
     lengths = [array.size for array in arrays]
     if len(set(lengths)) > 1:
@@ -440,7 +451,7 @@ def _propagate(Phi, Gamma, ends, z0, index=None, out=None) -> np.ndarray:
     out = np.empty((batch, count + 1, size)) if out is None else out
     out[:, 0] = z0
     transposed = np.swapaxes(Phi, -1, -2)
-    length = max(4, min(32, math.isqrt(count)))
+    length = max(4, min(32, round(count ** (1 / 3))))
     blocks = count // length if count > 2 * length else 0
     done = blocks * length
     if blocks:
@@ -494,8 +505,9 @@ def _propagate(Phi, Gamma, ends, z0, index=None, out=None) -> np.ndarray:
 # of Taylor coefficients about a centre (row[i] = J^(i)(centre) / i!); most functions take
 # a stack of rows, one per sample, and work on all of them at once.
 
+EPS = float(np.finfo(float).eps)
 NOISE = 10.0  # rounding noise: within NOISE (1 + memory / step) eps of the terms it sums
-ROUNDING = 16 * np.finfo(float).eps
+ROUNDING = 16 * EPS
 
 
 def _cost_forms(Theta: np.ndarray) -> np.ndarray:
@@ -512,48 +524,53 @@ def _cost_forms(Theta: np.ndarray) -> np.ndarray:
     return forms
 
 
-def _taylor(P: np.ndarray, k) -> np.ndarray:
+def _columns(P) -> list:
+    """P's coefficients, lowest power first: arrays over samples (P an array of rows), or
+    floats (P a sequence of numbers: one polynomial, as a Tracker's one-sample update has)."""
+    return [P[..., i] for i in range(P.shape[-1])] if isinstance(P, np.ndarray) else list(P)
+
+
+def _taylor(P, k):
     """Taylor coefficients about k of each row of P (ascending powers): row[i] = P^(i)(k)/i!."""
-    a = np.array(P, dtype=float)
-    k = np.asarray(k, dtype=float)
-    degree = a.shape[-1] - 1
+    a = _columns(P)
+    degree = len(a) - 1
     for low in range(degree):  # repeated synthetic division by (x - k)
         for i in range(degree - 1, low - 1, -1):
-            a[..., i] += k * a[..., i + 1]
-    return a
+            a[i] = a[i] + k * a[i + 1]
+    return np.stack(a, -1) if isinstance(P, np.ndarray) else a
 
 
-def _value(P: np.ndarray, k) -> np.ndarray:
+def _value(P, k):
     """Each row polynomial (ascending) at its k (Horner)."""
-    value = np.zeros(np.broadcast_shapes(P.shape[:-1], np.shape(k)))
-    for p in range(P.shape[-1] - 1, -1, -1):
-        value = value * k + P[..., p]
+    value = 0.0
+    for coefficient in reversed(_columns(P)):
+        value = value * k + coefficient
     return value
 
 
-def _slopes(P: np.ndarray, k) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def _slopes(P, k):
     """J_1 and J_2 of each row at its k, and the size of the terms J_1 sums (its rounding)."""
-    degree = P.shape[-1] - 1
+    a = _columns(P)
     first = second = size = 0.0
-    for p in range(degree, 0, -1):
-        first = first * k + p * P[..., p]
-        size = size * np.abs(k) + p * np.abs(P[..., p])
+    for p in range(len(a) - 1, 0, -1):
+        first = first * k + p * a[p]
+        size = size * abs(k) + p * abs(a[p])
         if p >= 2:
-            second = second * k + p * (p - 1) * P[..., p]
+            second = second * k + p * (p - 1) * a[p]
     return first, second, size
 
 
-def _curvature_floor(A: np.ndarray, reach) -> np.ndarray:
+def _curvature_floor(A, reach):
     """A lower bound of J_2 on the interval within `reach` of the centre of the Taylor rows A.
 
     J_2(centre + d) = sum_(i >= 2) i (i - 1) A_i d^(i-2): the terms beyond the first can
     lower it by at most sum_(i >= 3) i (i - 1) |A_i| reach^(i-2).
     """
-    floor = 2.0 * A[..., 2]
-    power = np.ones_like(floor)
-    for i in range(3, A.shape[-1]):
+    a = _columns(A)
+    floor, power = 2.0 * a[2], 1.0
+    for i in range(3, len(a)):
         power = power * reach
-        floor = floor - i * (i - 1) * np.abs(A[..., i]) * power
+        floor = floor - i * (i - 1) * abs(a[i]) * power
     return floor
 
 
@@ -685,14 +702,22 @@ class _Setup:
     hold: str
     forms: np.ndarray  # the cost's quadratic forms in X, one per power of k
     memory: float  # the filter's slowest time constant
-    state_scale: np.ndarray  # s^i w/C is about state_scale[i] times w/C
+    phi_map: np.ndarray  # phi = [z_y, z_u] @ phi_map (X is the first n+1 and m+1 states)
+    floor_map: np.ndarray  # the rounding of phi is about eps |[z_y, z_u]| @ floor_map
 
     @staticmethod
     def of(Theta: np.ndarray, c: np.ndarray, beta: float, hold: str) -> "_Setup":
         A, B = _realisation(c)
         order = c.size - 1
-        scale = (c[-1] / c[0]) ** (np.arange(order) / order)
-        return _Setup(Theta, A, B, beta, hold, _cost_forms(Theta), _memory(c), scale)
+        phi_map = np.zeros((2 * order, N + 1))
+        phi_map[: n + 1], phi_map[order : order + m + 1] = Theta[: n + 1], Theta[n + 1 :]
+        # a state's rounding is about eps times the size of its filter's whole state, each
+        # entry scaled to w/C (s^i w/C is about rate^i w/C): within a factor order, this sum
+        scale = np.tile((c[-1] / c[0]) ** (np.arange(order) / order), 2)
+        reach = (np.abs(phi_map) * scale[:, None]).reshape(2, order, -1).sum(1)
+        floor_map = np.repeat(reach, order, axis=0) / scale[:, None]
+        forms = _cost_forms(Theta)
+        return _Setup(Theta, A, B, beta, hold, forms, _memory(c), phi_map, floor_map)
 
     def maps(self, steps: np.ndarray):
         """Phi, Gamma (both filters, as one block-diagonal system) and the cost forms W."""
@@ -704,24 +729,22 @@ class _Setup:
                               self.forms, span=span)  # fmt: skip
         return maps[2][0]
 
-    def quiet(self, flat: np.ndarray, steps) -> np.ndarray:
-        """Whether each interval is rounding noise (see above), from the filter states
-        [z_y, z_u] at every sample and the steps (one, or one per interval).
+    def noise(self, flat: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """|phi| (the coefficients of the error g in k) at each sample, from the filter
+        states [z_y, z_u], and the size of the terms it sums, whose rounding it is below."""
+        return np.abs(flat @ self.phi_map), np.abs(flat) @ self.floor_map
 
-        A filter state's rounding is about eps times the size of the whole state (each
-        entry scaled to w/C), which bounds |z| @ (1 / state_scale) within a factor order.
-        """
-        order = self.A.shape[0]
-        Theta = np.zeros((2 * order, N + 1))  # phi = z @ Theta: X is the first n+1, m+1
-        Theta[: n + 1], Theta[order : order + m + 1] = self.Theta[: n + 1], self.Theta[n + 1 :]
-        scale = np.r_[self.state_scale, self.state_scale]
-        reach = (np.abs(Theta) * scale[:, None]).reshape(2, order, -1).sum(1)
-        reach = np.repeat(reach, order, axis=0) / scale[:, None]  # floor = |z| @ reach
-        phi = np.abs(flat @ Theta)
-        floor = np.abs(flat) @ reach
-        limit = NOISE * np.finfo(float).eps * (1.0 + self.memory / np.asarray(steps))
-        limit = limit[:, None] if np.ndim(limit) else limit
-        return ((phi[:-1] <= limit * floor[:-1]) & (phi[1:] <= limit * floor[1:])).all(1)
+    def quiet(self, noise: tuple, steps) -> np.ndarray:
+        """Whether each interval is rounding noise: `noise` at every sample, and the steps
+        (one, or one per interval). See above for the threshold."""
+        phi, floor = noise
+        limit = self.limit(np.asarray(steps))
+        limit = limit[..., None] if np.ndim(limit) else limit
+        return ((phi[:-1] <= limit * floor[:-1]) & (phi[1:] <= limit * floor[1:])).all(-1)
+
+    def limit(self, steps):
+        """The noise threshold for intervals of these steps, relative to eps times floor."""
+        return NOISE * EPS * (1.0 + self.memory / steps)
 
 
 def _moments_input(z0: np.ndarray, y: np.ndarray, u: np.ndarray, maps, index) -> np.ndarray:
@@ -777,7 +800,9 @@ class _Run:
         self.taylor = _taylor(self.P, k0)  # of J about k^, scaled as P
         self.ok, self.stopped_at = True, None
         self.informed = -math.inf  # the time of the last informative sample
+        self.noise = None  # the last sample's (|phi|, floor), see _Setup.noise
         self.cache: dict[float, tuple] = {}
+        self.step = None  # the last piece's step and maps, when it had one step
 
     def _maps(self, steps: np.ndarray, resolution: float):
         """Phi, Gamma and W for each step, made once per distinct step and kept."""
@@ -790,15 +815,66 @@ class _Run:
                 key = h
                 self.cache[key] = tuple(part[0] for part in self.setup.maps(np.array([h])))
             found.append(self.cache[key])
+        self.step = (steps[0], found[0]) if len(found) == 1 else None
         return tuple(np.stack(parts) for parts in zip(*found, strict=True))
+
+    def _one(self, t: float, u: float, y: float) -> bool:
+        """One sample after the last, in the common case: the same arithmetic as `_piece`,
+        in floats where numpy's cost per call would dominate. False, having changed
+        nothing, where `_piece` is needed (a new step, an interval to cross in sub-steps,
+        a fold, a stopped run, a scale beyond floats)."""
+        setup, step = self.setup, self.step
+        h = t - self.t
+        if not (self.ok and step and abs(h - step[0]) <= TIME_RESOLUTION * abs(t)):
+            return False
+        Phi, Gamma, W = step[1]
+        order = Phi.shape[-1]
+        ends = np.array([[self.y, y], [self.u, u]])
+        following = self.z.reshape(2, order) @ Phi.T + (ends[:, None] @ Gamma)[:, 0]
+        v = np.concatenate([self.z, ends.ravel()])
+        noise = setup.noise(following.reshape(1, -1))
+        limit = setup.limit(step[0])
+        quiet = bool((noise[0] <= limit * noise[1]).all() and (self.noise[0] <= limit * self.noise[1]).all())
+        growth = setup.beta * h - self.log_scale  # J = exp(log_scale) P, then decays by e^(-beta h)
+        if growth > 700.0:
+            return False
+        q = [0.0] * len(self.P) if quiet else ((W @ v) @ v).tolist()
+        q[0], q[-1] = max(q[0], 0.0), max(q[-1], 0.0)
+        factor = math.exp(growth)
+        P = [p + factor * value for p, value in zip(self.P.tolist(), q, strict=True)]
+        k = self.khat
+        if not quiet:  # Newton from k^, accepted as in _follow
+            for _ in range(12):
+                first, second, size = _slopes(P, k)
+                if not second > 0:
+                    return False
+                k, settled = k - first / second, abs(first) <= ROUNDING * size
+                if settled:
+                    break
+            else:
+                return False
+            reach = abs(k - self.khat)
+            if not (_slopes(P, k)[1] > 0 and _curvature_floor(_taylor(P, self.khat), reach) > 0
+                    and _curvature_floor(self.taylor, reach) > 0):  # fmt: skip
+                return False
+            self.informed = t
+        scale = max(abs(value) for value in P)
+        P = [value / scale for value in P]
+        self.P, self.log_scale = np.array(P), self.log_scale + math.log(scale) - setup.beta * h
+        self.z, self.t, self.u, self.y, self.noise = following.ravel(), t, u, y, noise
+        self.khat, self.taylor = k, np.array(_taylor(P, k))
+        return True
 
     def advance(self, t: np.ndarray, u: np.ndarray, y: np.ndarray, record: bool = False):
         """Take checked samples that follow the last. With record, return for each sample
         reached (all of them unless the run stops) t, k^, the Taylor rows of J about k^
         and their log scale (J's i-th derivative is i! row[i] exp(scale))."""
+        if not record and t.size == 1 and self._one(t.item(), u.item(), y.item()):
+            return None
         pieces = []
         if self.t == -math.inf and t.size:
             self.t, self.u, self.y, self.informed = t[0], u[0], y[0], t[0]
+            self.noise = self.setup.noise(self.z[None])
             if record:
                 pieces.append((t[:1], np.array([self.khat]), self.taylor[None],
                                np.array([self.log_scale])))  # fmt: skip
@@ -826,7 +902,9 @@ class _Run:
         rows = _moments_input(self.z, ys, us, maps, steps.index)
         width = self.z.size
         q = _interval_costs(rows[:-1], maps[2], steps.index)
-        quiet = setup.quiet(rows[:, :width], steps.values if steps.index is None else steps.at(steps.values))
+        noise = setup.noise(rows[:, :width])
+        quiet = setup.quiet(noise, steps.values if steps.index is None else steps.at(steps.values))
+        self.noise = (noise[0][-1:], noise[1][-1:])
         q[quiet] = 0.0
         if not quiet.all():
             self.informed = times[1 + np.flatnonzero(~quiet)[-1]]
@@ -1278,7 +1356,8 @@ def fit(t, u, y, *, C=None, beta: float = 0.0, bounds=None, hold: str = "linear"
             maps = setup.maps(steps.values[which])
         rows = _moments_input(z, y[lo:hi], u[lo:hi], maps, index)
         z = rows[-1, : z.size]
-        quiet = setup.quiet(rows[:, : z.size], steps.values if index is None else np.diff(t[lo:hi]))
+        noise = setup.noise(rows[:, : z.size])
+        quiet = setup.quiet(noise, steps.values if index is None else np.diff(t[lo:hi]))
         V = rows[:-1]
         if beta == 0 and not quiet.any():
             weight = None
