@@ -28,8 +28,14 @@ How to use it
     t = np.linspace(0.0, 10.0, 1001)
     u = np.ones_like(t)                                # a unit step
     y = rlc.simulate(t, u, k=0.1)
+    # the paper's estimate from k0, the global minimiser of the cost J, its local minima:
     result = rlc.estimate(t, u, y, k0=0.05)
-    result.k, result.minima()                          # final estimate, local minima of J
+    result.k, result.global_k[-1], result.minima()
+    # least squares over the whole record, globally:
+    rlc.fit(t, u, y).k
+    # a live stream, one sample (or chunk) at a time:
+    tracker = rlc.Tracker(k0=0.05)
+    tracker.update(t[0], u[0], y[0])
 
 or, from data in a CSV file with columns t, u, y:
 
@@ -39,8 +45,13 @@ API (the unknown is always called k here)
     theta(**known)                  Theta: rows a0..an, -b0..-bm; column j holds k^j terms
     transfer_function(k, **known)   (num, den), highest power of s first (scipy.signal)
     simulate(t, u, k, *, hold="linear", **known) -> y, exact for the stated hold
-    estimate(t, u, y, *, k0, beta=0.1, S0=1e-4, C=None, hold="linear", method="RK23",
-             rtol=1e-6, atol=1e-9, max_step=inf, progress=None, **known) -> Estimate
+    estimate(t, u, y, *, k0, beta=0.1, S0=1e-4, C=None, hold="linear", engine="moments",
+             bounds=None, method="RK23", rtol=1e-6, atol=1e-9, max_step=inf,
+             progress=None, **known) -> Estimate: k^ at every sample (and global_k)
+    fit(t, u, y, *, C=None, beta=0.0, bounds=None, hold="linear", **known) -> Fit
+    Tracker(*, k0, beta=0.1, S0=1e-4, C=None, hold="linear", bounds=None, **known)
+                                    .update(t, u, y) -> k^; .k, .global_k, .t
+    filter_states(t, w, *, C=None, hold="linear")  s^i w / C(s) at the sample times
     filter_polynomial(C)            the filter C(s) that `estimate` uses for a given C
     read_csv(path, columns)         named columns of a CSV file, as float arrays
 
@@ -459,18 +470,19 @@ def _propagate(Phi, Gamma, ends, z0, index=None, out=None) -> np.ndarray:
         E = ends[:, :done].reshape(batch, blocks, length, -1)
         O[:, :, 0] = 0.0
         if index is None:
+            drive = (ends[:, :done] @ Gamma[0]).reshape(batch, blocks, length, size)
             for j in range(length - 1):
                 np.matmul(O[:, :, j], transposed[0], out=O[:, :, j + 1])
-                O[:, :, j + 1] += E[:, :, j] @ Gamma[0]
-            last = O[:, :, -1] @ transposed[0] + E[:, :, -1] @ Gamma[0]
+                O[:, :, j + 1] += drive[:, :, j]
+            last = O[:, :, -1] @ transposed[0] + drive[:, :, -1]
             powers = np.empty((length + 1, size, size))
             powers[0] = np.eye(size)
             for j in range(length):
                 np.matmul(Phi[0], powers[j], out=powers[j + 1])
             identity = np.broadcast_to(np.eye(size), (1, batch, size, size))
             starts = _propagate(powers[length:], identity, last, z0)
-            for j in range(length):
-                O[:, :, j] += starts[:, :blocks] @ powers[j].T
+            free = starts[:, :blocks].reshape(-1, size) @ powers[:length].transpose(2, 0, 1).reshape(size, -1)
+            O += free.reshape(batch, blocks, length, size)  # each block's start, propagated
         else:
             where = index[:done].reshape(blocks, length)
 
@@ -550,11 +562,11 @@ def _value(P, k):
 
 def _slopes(P, k):
     """J_1 and J_2 of each row at its k, and the size of the terms J_1 sums (its rounding)."""
-    a = _columns(P)
+    a, distance = _columns(P), abs(k)
     first = second = size = 0.0
     for p in range(len(a) - 1, 0, -1):
         first = first * k + p * a[p]
-        size = size * abs(k) + p * abs(a[p])
+        size = size * distance + p * abs(a[p])
         if p >= 2:
             second = second * k + p * (p - 1) * a[p]
     return first, second, size
@@ -577,7 +589,7 @@ def _curvature_floor(A, reach):
 def _newton(P: np.ndarray, k, iterations: int = 12) -> tuple[np.ndarray, np.ndarray]:
     """Stationary points of each row near k by Newton's method: (points, converged).
 
-    Converged means J_1 is within rounding of the terms it sums and J_2 > 0 there (a local
+    Converged means J_1 is within rounding of the terms it sums where J_2 > 0 (near a local
     minimum); one more step polishes it. Rows that do not converge are left as they are.
     """
     k = np.array(np.broadcast_to(k, P.shape[:-1]), dtype=float)
@@ -591,8 +603,7 @@ def _newton(P: np.ndarray, k, iterations: int = 12) -> tuple[np.ndarray, np.ndar
         done |= settled
         if done.all():
             break
-    first, second, size = _slopes(P, k)
-    return k, done & (second > 0) & np.isfinite(k)
+    return k, done & np.isfinite(k)
 
 
 def _companion_roots(D: np.ndarray) -> np.ndarray:
@@ -797,7 +808,7 @@ class _Run:
         self.P[:3] = [k0 * k0, -2.0 * k0, 1.0]  # the prior S0 (k - k0)^2 / 2
         self.log_scale = math.log(0.5 * S0)
         self.khat = k0
-        self.taylor = _taylor(self.P, k0)  # of J about k^, scaled as P
+        self.taylor = np.array(_taylor(self.P.tolist(), k0))  # of J about k^, scaled as P
         self.ok, self.stopped_at = True, None
         self.informed = -math.inf  # the time of the last informative sample
         self.noise = None  # the last sample's (|phi|, floor), see _Setup.noise
@@ -806,6 +817,8 @@ class _Run:
 
     def _maps(self, steps: np.ndarray, resolution: float):
         """Phi, Gamma and W for each step, made once per distinct step and kept."""
+        if steps.size == 1 and self.step and abs(steps[0] - self.step[0]) <= resolution:
+            return self.step[2]  # the same step as last time (a regular record)
         found = []
         for h in steps.tolist():
             key = next((key for key in self.cache if abs(key - h) <= resolution), None)
@@ -815,8 +828,9 @@ class _Run:
                 key = h
                 self.cache[key] = tuple(part[0] for part in self.setup.maps(np.array([h])))
             found.append(self.cache[key])
-        self.step = (steps[0], found[0]) if len(found) == 1 else None
-        return tuple(np.stack(parts) for parts in zip(*found, strict=True))
+        maps = tuple(np.stack(parts) for parts in zip(*found, strict=True))
+        self.step = (steps[0], found[0], maps) if len(found) == 1 else None
+        return maps
 
     def _one(self, t: float, u: float, y: float) -> bool:
         """One sample after the last, in the common case: the same arithmetic as `_piece`,
@@ -853,8 +867,8 @@ class _Run:
                     break
             else:
                 return False
-            reach = abs(k - self.khat)
-            if not (_slopes(P, k)[1] > 0 and _curvature_floor(_taylor(P, self.khat), reach) > 0
+            reach, own = abs(k - self.khat), _taylor(P, k)
+            if not (own[2] > 0 and _curvature_floor(own, reach) > 0
                     and _curvature_floor(self.taylor, reach) > 0):  # fmt: skip
                 return False
             self.informed = t
@@ -935,7 +949,7 @@ class _Run:
         self.P, self.log_scale = E[-1] / scale, log_scale[-1] + math.log(scale)
         if khat.size:
             self.khat = khat[-1]
-        self.taylor = _taylor(self.P, self.khat)
+        self.taylor = np.array(_taylor(self.P.tolist(), self.khat))
         return t[: khat.size], khat, taylor, log_scale[: khat.size]
 
     def _follow(self, E: np.ndarray, times: np.ndarray, quiet: np.ndarray, partial):
@@ -954,10 +968,10 @@ class _Run:
                 converged = (last < 0) | converged[last]
             previous = np.concatenate([[k], candidate[:-1]])
             reach = np.abs(candidate - previous)
-            own = _taylor(E[i:j], candidate)
-            back = np.concatenate([before[None], own[:-1]])
-            good = converged & (_curvature_floor(_taylor(E[i:j], previous), reach) > 0)
-            good &= _curvature_floor(back, reach) > 0
+            own = _taylor(E[i:j], candidate)  # J about each new point
+            back = np.concatenate([before[None], own[:-1]])  # J before, about the old point
+            good = converged & (own[:, 2] > 0)  # a minimum: J_2 > 0 there
+            good &= (_curvature_floor(own, reach) > 0) & (_curvature_floor(back, reach) > 0)
             run = j - i if good.all() else int(np.argmin(good))
             if run:
                 khat[i : i + run], taylor[i : i + run] = candidate[:run], own[:run]
@@ -981,13 +995,14 @@ class _Run:
             target = min(h, done + step)
             P = partial(l, target)
             r, converged = _newton(P[None], k)
-            reach = abs(r[0] - k)
+            reach, own = abs(r[0] - k), _taylor(P, r[0])
             if (
                 converged[0]
-                and _curvature_floor(_taylor(P, k), reach) > 0
+                and own[2] > 0
+                and _curvature_floor(own, reach) > 0
                 and _curvature_floor(before, reach) > 0
             ):
-                done, k, before = target, float(r[0]), _taylor(P, r[0])
+                done, k, before = target, float(r[0]), own
                 if done >= h:
                     return k
                 step *= 2.0

@@ -1,0 +1,86 @@
+"""fit against output-error least squares on noisy DC-drive records (issue 8).
+
+The record: the DC drive (k = 10) driven by a unit step, 10 s sampled every 0.001 s (10^4
+samples), output noise uniform in +-0.01, one record per seed. Output-error least squares
+is scipy.optimize.least_squares over k of the residual y - lsim(G(s, k), u, t) (scipy's
+own simulation of the transfer function), started at k = 5; it is the maximum-likelihood
+estimate for this noise. Against it: the generated module's `fit` (no starting value; the
+global minimiser of the filtered equation-error cost, C(s) = (1 + s)^5, beta = 0) and its
+`estimate` (the paper's algorithm from k0 = 5, beta = 0.1, S0 = 1e-4).
+
+Times are medians over the seeds; errors are the root mean square of k - 10 over the
+seeds. BLAS runs on one thread (see bench/estimate.py).
+
+    .venv/bin/python bench/fit.py [--seeds 20]
+"""
+
+from __future__ import annotations
+
+import os
+
+os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")  # before numpy loads OpenBLAS
+
+import argparse  # noqa: E402
+import importlib.util  # noqa: E402
+import statistics  # noqa: E402
+import sys  # noqa: E402
+import time  # noqa: E402
+from pathlib import Path  # noqa: E402
+
+import numpy as np  # noqa: E402
+from scipy import optimize, signal  # noqa: E402
+
+ROOT = Path(__file__).resolve().parent.parent
+
+
+def generated(name: str):
+    spec = importlib.util.spec_from_file_location(name, ROOT / "generated" / f"{name}.py")
+    module = importlib.util.module_from_spec(spec)
+    sys.modules[name] = module
+    spec.loader.exec_module(module)
+    return module
+
+
+def output_error(module, t, u, y, k0: float = 5.0) -> float:
+    """k minimising the sum of squared output errors of scipy's simulation of G(s, k)."""
+
+    def residual(k):
+        return signal.lsim(module.transfer_function(k[0]), u, t)[1] - y
+
+    return float(optimize.least_squares(residual, [k0]).x[0])
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--seeds", type=int, default=20, help="records (20)")
+    args = parser.parse_args()
+    dc = generated("dc_drive")
+    t = 0.001 * np.arange(10**4 + 1)
+    u = np.ones_like(t)
+    clean = dc.simulate(t, u, 10.0)
+    methods = {
+        "output-error least squares (scipy)": lambda y: output_error(dc, t, u, y),
+        "fit": lambda y: dc.fit(t, u, y).k,
+        "estimate (k0 = 5)": lambda y: dc.estimate(t, u, y, k0=5.0).k,
+    }
+    times = {name: [] for name in methods}
+    errors = {name: [] for name in methods}
+    for seed in range(args.seeds):
+        y = clean + np.random.default_rng(seed).uniform(-0.01, 0.01, t.size)
+        for name, method in methods.items():
+            start = time.perf_counter()
+            k = method(y)
+            times[name].append(time.perf_counter() - start)
+            errors[name].append(k - 10.0)
+    baseline = statistics.median(times["output-error least squares (scipy)"])
+    print(f"| method | median time | output-error time / time | rms error of k ({args.seeds} "
+          "seeds) |")  # fmt: skip
+    print("|---|---|---|---|")
+    for name in methods:
+        median = statistics.median(times[name])
+        rms = float(np.sqrt(np.mean(np.square(errors[name]))))
+        print(f"| {name} | {median * 1e3:.2f} ms | {baseline / median:.1f}x | {rms:.2e} |")
+
+
+if __name__ == "__main__":
+    main()
