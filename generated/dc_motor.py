@@ -480,8 +480,9 @@ def _propagate(Phi, Gamma, ends, z0, index=None, out=None) -> np.ndarray:
                 np.matmul(Phi[0], powers[j], out=powers[j + 1])
             identity = np.broadcast_to(np.eye(size), (1, batch, size, size))
             starts = _propagate(powers[length:], identity, last, z0)
-            free = starts[:, :blocks].reshape(-1, size) @ powers[:length].transpose(2, 0, 1).reshape(size, -1)
-            O += free.reshape(batch, blocks, length, size)  # each block's start, propagated
+            spread = powers[:length].transpose(2, 0, 1).reshape(size, -1)  # [P^0' .. P^(L-1)']
+            free = starts[:, :blocks].reshape(-1, size) @ spread  # each block's start, on
+            O += free.reshape(batch, blocks, length, size)
         else:
             where = index[:done].reshape(blocks, length)
 
@@ -847,7 +848,8 @@ class _Run:
         v = np.concatenate([self.z, ends.ravel()])
         noise = setup.noise(following.reshape(1, -1))
         limit = setup.limit(step[0])
-        quiet = bool((noise[0] <= limit * noise[1]).all() and (self.noise[0] <= limit * self.noise[1]).all())
+        last = self.noise
+        quiet = bool((noise[0] <= limit * noise[1]).all() and (last[0] <= limit * last[1]).all())
         growth = setup.beta * h - self.log_scale  # J = exp(log_scale) P, then decays by e^(-beta h)
         if growth > 700.0:
             return False
@@ -1189,8 +1191,8 @@ def estimate(
             )
     return Estimate(
         t=times, khat=khat, global_k=best, ok=stop is None, message=message,
-        stopped_at=None if stop is None else float(stop[0]), informed_until=informed, bounds=bounds, _shape=shape,
-        _log_J2=log_J2,
+        stopped_at=None if stop is None else float(stop[0]), informed_until=informed,
+        bounds=bounds, _shape=shape, _log_J2=log_J2,
     )  # fmt: skip
 
 
@@ -1532,7 +1534,8 @@ def main(argv: list[str] | None = None) -> int:
         known = dict(_assignment(text) for text in args.set)
         t, u, y = read_csv(args.data)
         options = dict(beta=args.beta, S0=args.S0, C=C, hold=args.hold, engine=args.engine,
-                       bounds=args.bounds, method=args.method, rtol=args.rtol, atol=args.atol)  # fmt: skip
+                       bounds=args.bounds, method=args.method)  # fmt: skip
+        options |= dict(rtol=args.rtol, atol=args.atol)
         runs = [estimate(t, u, y, k0=k0, **options, **known) for k0 in args.k0]
     except (OSError, ValueError) as error:
         print(f"{parser.prog}: error: {error}", file=sys.stderr)

@@ -209,7 +209,7 @@ def test_generated_modules_are_standalone(tmp_path):
     """Import the committed module where mtt (and sympy, jinja2, ...) cannot be imported."""
     (tmp_path / "dc_drive.py").write_bytes((ROOT / "generated" / "dc_drive.py").read_bytes())
     program = f"""
-import json, runpy, sys
+import json, pickle, runpy, sys
 for name in ("mtt", "sympy", "jinja2", "lark", "networkx", "matplotlib"):
     sys.modules[name] = None  # importing any of them now fails
 sys.path.insert(0, {str(tmp_path)!r})
@@ -220,8 +220,11 @@ u = np.ones_like(t)
 y = dc_drive.simulate(t, u, 10.0)
 np.savetxt("data.csv", np.column_stack([t, u, y]), delimiter=",", header="t,u,y", comments="")
 result = dc_drive.estimate(t, u, y, k0=5.0)
-print(json.dumps({{"k": result.k, "ok": result.ok}}))
-sys.argv = ["dc_drive.py", "data.csv", "--k0", "0", "20", "--json"]
+tracker = pickle.loads(pickle.dumps(dc_drive.Tracker(k0=5.0)))
+tracker.update(t, u, y)
+print(json.dumps({{"k": result.k, "ok": result.ok, "fit": dc_drive.fit(t, u, y).k,
+                  "tracker": tracker.k}}))
+sys.argv = ["dc_drive.py", "data.csv", "--k0", "0", "20", "--json", "--bounds", "0", "100"]
 try:
     runpy.run_path({str(tmp_path / "dc_drive.py")!r}, run_name="__main__")
 except SystemExit as exit:
@@ -233,8 +236,10 @@ except SystemExit as exit:
     assert done.returncode == 0, done.stderr
     api, script = (json.loads(line) for line in done.stdout.splitlines())
     assert api["ok"] and abs(api["k"] - 10.0) < 0.1
+    assert abs(api["fit"] - 10.0) < 1e-3 and api["tracker"] == pytest.approx(api["k"], rel=1e-9)
     assert [run["k0"] for run in script["runs"]] == [0.0, 20.0]
     assert all(abs(run["k"] - 10.0) < 0.1 for run in script["runs"])
+    assert all(run["ok"] and run["global_k"] == pytest.approx(run["k"]) for run in script["runs"])
 
 
 def test_write_atomic_replaces_whole_files_or_nothing(tmp_path, monkeypatch):
