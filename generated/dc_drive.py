@@ -454,13 +454,15 @@ def _propagate(Phi, Gamma, ends, z0, index=None, out=None) -> np.ndarray:
 
     k = index_i (None: 0); Phi (k, s, s), Gamma (k, batch, e, s), ends (batch, n, e), z0
     (batch, s); the states (batch, n + 1, s), from z_0 = z0, are written into `out` if
-    given. By blocks of L intervals: the responses of all blocks from rest advance together
-    (one matrix product per position in a block), the block starts follow one another (the
-    same recursion with the blocks' transition matrices, done the same way), and each
-    block's free response from its start is added. Python loops run over about
-    3 L log(n) / log(L) steps, each a small product over all blocks. The arithmetic is the
-    plain recursion's, exact for every step: no transfer function in z, whose coefficients
-    lose all accuracy when the filter's poles crowd near z = 1 at fine sampling.
+    given. By blocks of L intervals: each block's end state from rest is one convolution
+    (a product with the stacked Phi^j Gamma), the block starts follow one another (the same
+    recursion with the blocks' transition Phi^L, done the same way), then all blocks advance
+    together from their starts, one matrix product per position in a block. (Steps that
+    differ from one interval to the next: from rest, the starts, then again from them.)
+    Python loops run over about 2 L log(n) / log(L) steps, each a small product over all
+    blocks. The arithmetic is the plain recursion's, exact for every step: no transfer
+    function in z, whose coefficients lose all accuracy when the filter's poles crowd near
+    z = 1 at fine sampling.
     """
     batch, count = ends.shape[:2]
     size = Phi.shape[-1]
@@ -472,26 +474,26 @@ def _propagate(Phi, Gamma, ends, z0, index=None, out=None) -> np.ndarray:
     blocks = count // length if count > 2 * length else 0
     done = blocks * length
     if blocks:
-        O = out[:, :done].reshape(batch, blocks, length, size)  # from rest, then from starts
+        O = out[:, :done].reshape(batch, blocks, length, size)
         E = ends[:, :done].reshape(batch, blocks, length, -1)
-        O[:, :, 0] = 0.0
         if index is None:
-            drive = (ends[:, :done] @ Gamma[0]).reshape(batch, blocks, length, size)
-            for j in range(length - 1):
-                np.matmul(O[:, :, j], transposed[0], out=O[:, :, j + 1])
-                O[:, :, j + 1] += drive[:, :, j]
-            last = O[:, :, -1] @ transposed[0] + drive[:, :, -1]
             powers = np.empty((length + 1, size, size))
             powers[0] = np.eye(size)
             for j in range(length):
                 np.matmul(Phi[0], powers[j], out=powers[j + 1])
+            # each block's end from rest, sum_j Phi^(L-1-j) Gamma^T e_j: one product a batch
+            kernel = Gamma[0][None] @ np.swapaxes(powers[length - 1 :: -1], 1, 2)[:, None]
+            inputs = np.ascontiguousarray(E).reshape(batch, blocks, -1)
+            last = inputs @ np.swapaxes(kernel, 0, 1).reshape(batch, -1, size)
             identity = np.broadcast_to(np.eye(size), (1, batch, size, size))
             starts = _propagate(powers[length:], identity, last, z0)
-            spread = powers[:length].transpose(2, 0, 1).reshape(size, -1)  # [P^0' .. P^(L-1)']
-            free = starts[:, :blocks].reshape(-1, size) @ spread  # each block's start, on
-            O += free.reshape(batch, blocks, length, size)
+            O[:, :, 0] = starts[:, :blocks]
+            for j in range(length - 1):  # then every block from its start, all at once
+                np.matmul(O[:, :, j], transposed[0], out=O[:, :, j + 1])
+                O[:, :, j + 1] += E[:, :, j] @ Gamma[0]
         else:
             where = index[:done].reshape(blocks, length)
+            O[:, :, 0] = 0.0  # from rest first
 
             def advance() -> np.ndarray:
                 for j in range(length):
@@ -567,13 +569,15 @@ def _value(P, k):
     return value
 
 
-def _slopes(P, k):
-    """J_1 and J_2 of each row at its k, and the size of the terms J_1 sums (its rounding)."""
+def _slopes(P, k, sizes=None):
+    """J_1 and J_2 of each row at its k, and the size of the terms J_1 sums (its rounding);
+    `sizes` are P's coefficients' magnitudes, when the caller has them."""
     a, distance = _columns(P), abs(k)
+    sizes = [abs(value) for value in a] if sizes is None else sizes
     first = second = size = 0.0
     for p in range(len(a) - 1, 0, -1):
         first = first * k + p * a[p]
-        size = size * distance + p * abs(a[p])
+        size = size * distance + p * sizes[p]
         if p >= 2:
             second = second * k + p * (p - 1) * a[p]
     return first, second, size
@@ -601,8 +605,9 @@ def _newton(P: np.ndarray, k, iterations: int = 12) -> tuple[np.ndarray, np.ndar
     """
     k = np.array(np.broadcast_to(k, P.shape[:-1]), dtype=float)
     done = np.zeros(k.shape, dtype=bool)
+    sizes = [abs(value) for value in _columns(P)]
     for _ in range(iterations):
-        first, second, size = _slopes(P, k)
+        first, second, size = _slopes(P, k, sizes)
         ok = second > 0
         step = np.where(ok, -first / np.where(ok, second, 1.0), 0.0)
         settled = ok & (np.abs(first) <= ROUNDING * size)
