@@ -63,15 +63,14 @@ def _summary(
         record["components"] = len({use.name for use in parsed.mentions})
         record["bonds"] = len(parsed.bonds)
         record["parameters"] = {
-            p.name: None if p.value is None else str(p.value.value) for p in parsed.parameters
+            p.name: None if p.value is None else str(p.value) for p in parsed.parameters
         }
         record["unknown"] = [p.name for p in parsed.parameters if p.unknown]
     if graph is not None:
-        record["components"] = graph.graph.number_of_nodes()
+        record["components"] = len(graph.components)
         record["bonds"] = len(graph.bonds)
         record["parameters"] = {
-            p.name: None if p.value is None else str(p.value.value)
-            for p in graph.parameters.values()
+            p.name: None if p.value is None else str(p.value) for p in graph.parameters.values()
         }
         record["input"] = graph.component(graph.input).label
         record["output"] = graph.component(graph.output).label
@@ -82,9 +81,10 @@ def _summary(
 def _check_one(file: str, args) -> tuple[dict, ModelError | None, BondGraph | None]:
     """Everything that can be told of a model before algebra: the language's rules, then
     causality and the structure (can the input reach the output, the unknowns matter)."""
-    from mtt.derivation.pipeline import causal_for, read_source
+    from mtt.derivation.structure import causal_for
     from mtt.language.bondgraph import build
     from mtt.language.parse import parse
+    from mtt.language.subsystems import read_source
 
     parsed = graph = problem = None
     try:
@@ -165,7 +165,7 @@ def describe(graph: BondGraph) -> str:
         rows = []
         for sub in graph.subsystems:
             indent = "  " * sub.name.count(".")
-            bindings = ", ".join(f"{name} = {value}" for name, value in sub.bindings)
+            bindings = ", ".join(f"{name} = {value.value}" for name, value in sub.bindings)
             rows.append(
                 (indent + sub.name.rpartition(".")[2], sub.file, bindings and f"({bindings})",
                  sub.description or "")

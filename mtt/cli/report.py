@@ -176,7 +176,7 @@ def show_json(graph: BondGraph) -> dict:
             {
                 "name": sub.name,
                 "file": sub.file,
-                "parameters": {name: str(value) for name, value in sub.bindings},
+                "parameters": {name: str(value.value) for name, value in sub.bindings},
                 "description": sub.description,
             }
             for sub in graph.subsystems

@@ -152,7 +152,8 @@ def _values(poly: PolyElement, grid: list[np.ndarray], mods: np.ndarray) -> np.n
     """The polynomial at every grid point, modulo every prime: (points, primes)."""
     total = np.zeros((grid[0].size, mods.size), dtype=np.int64)
     for monom, coeff in poly.iterterms():
-        term = np.broadcast_to(int(coeff) % mods, total.shape)
+        residues = [int(coeff) % p for p in mods.tolist()]  # coefficients may be huge
+        term = np.broadcast_to(np.array(residues, dtype=np.int64), total.shape)
         for values, exponent in zip(grid, monom, strict=True):
             for _ in range(exponent):
                 term = term * values[:, None] % mods

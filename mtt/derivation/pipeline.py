@@ -4,10 +4,9 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from mtt.derivation.causality import CausalBondGraph, assign
 from mtt.derivation.equations import Equations, derive
 from mtt.derivation.parameters import ParameterChoice, parametrise
-from mtt.derivation.structure import structure_problems
+from mtt.derivation.structure import causal_for
 from mtt.derivation.theta import Theta, theta_matrix
 from mtt.derivation.transfer import TransferFunction, transfer_function
 from mtt.language.bondgraph import BondGraph, Selection, build
@@ -15,7 +14,7 @@ from mtt.language.diagnostics import ModelError, error
 from mtt.language.parse import parse
 from mtt.language.subsystems import read_source
 
-__all__ = ["read_source", "load", "equations_for", "transfer_for", "theta_for"]
+__all__ = ["causal_for", "read_source", "load", "equations_for", "transfer_for", "theta_for"]
 
 
 def load(path: str | Path, selection: Selection | None = None) -> BondGraph:
@@ -29,17 +28,6 @@ NO_UNKNOWN = error(
     "the model declares no unknown parameter: declare one with 'unknown NAME' or choose "
     "with --unknown NAME[,NAME...]",
 )
-
-
-def causal_for(graph: BondGraph, identify: bool = False) -> CausalBondGraph:
-    """Bond graph -> causal bond graph, free of structural problems: an output the input
-    does not reach; when the unknowns are to be identified (`identify`), an unknown that
-    cannot reach the output either."""
-    causal = assign(graph)
-    problems = [p for p in structure_problems(causal) if identify or p.kind == "unreachable_output"]
-    if problems:
-        raise ModelError(graph.source, problems)
-    return causal
 
 
 def equations_for(

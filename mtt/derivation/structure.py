@@ -11,12 +11,12 @@ Both are structural: they hold for every value of the parameters.
 
 from __future__ import annotations
 
-import networkx as nx
+from collections import defaultdict, deque
 
-from mtt.derivation.causality import CausalBondGraph
+from mtt.derivation.causality import CausalBondGraph, assign
 from mtt.language.bondgraph import BondGraph, Component
 from mtt.language.components import Role
-from mtt.language.diagnostics import Diagnostic, error
+from mtt.language.diagnostics import Diagnostic, ModelError, error
 
 INPUT, OUTPUT = ("u",), ("y",)
 
@@ -60,14 +60,29 @@ def _arrows(causal: CausalBondGraph, component: Component) -> list[tuple[tuple, 
     return [(a, b) for a in sources for b in imposed]
 
 
-def signal_flow(causal: CausalBondGraph) -> nx.DiGraph:
-    """Variables as nodes, an arrow from each variable to those computed from it."""
-    flow = nx.DiGraph()
-    flow.add_nodes_from([INPUT, OUTPUT])
+Flow = dict[tuple, set[tuple]]  # variable -> the variables computed from it
+
+
+def signal_flow(causal: CausalBondGraph) -> tuple[Flow, Flow]:
+    """The arrows from each variable to those computed from it, and back."""
+    forward: Flow = defaultdict(set)
+    backward: Flow = defaultdict(set)
     for component in causal.bondgraph.components:
-        flow.add_nodes_from(_imposed(causal, component.name))
-        flow.add_edges_from(_arrows(causal, component))
-    return flow
+        for a, b in _arrows(causal, component):
+            forward[a].add(b)
+            backward[b].add(a)
+    return forward, backward
+
+
+def _reached(arrows: Flow, start: tuple) -> set[tuple]:
+    """Every variable a chain of arrows leads to from `start` (breadth first)."""
+    seen, queue = set(), deque([start])
+    while queue:
+        for target in arrows.get(queue.popleft(), ()):
+            if target not in seen:
+                seen.add(target)
+                queue.append(target)
+    return seen
 
 
 def _unknowns_in(graph: BondGraph) -> dict[str, set[str]]:
@@ -81,7 +96,7 @@ def _unknowns_in(graph: BondGraph) -> dict[str, set[str]]:
             return {name}
         if name not in found:
             value = graph.parameters[name].value
-            names = {s.name for s in value.value.free_symbols} if value is not None else set()
+            names = {u.name for u in value.names} if value is not None else set()
             found[name] = {
                 u for n in names if n in graph.parameters and n not in seen
                 for u in of(n, seen | {name})
@@ -94,15 +109,15 @@ def _unknowns_in(graph: BondGraph) -> dict[str, set[str]]:
 def _entering(graph: BondGraph, component: Component, brought: dict) -> set[str]:
     if component.argument is None:
         return set()
-    symbols = component.argument.value.free_symbols
-    return {u for s in symbols if s.name in brought for u in brought[s.name]}
+    names = {use.name for use in component.argument.names}
+    return {u for name in names if name in brought for u in brought[name]}
 
 
 def structure_problems(causal: CausalBondGraph) -> list[Diagnostic]:
     """An output the input cannot reach, and unknowns that cannot reach the output."""
     graph = causal.bondgraph
-    flow = signal_flow(causal)
-    reached = nx.descendants(flow, INPUT)
+    forward, backward = signal_flow(causal)
+    reached = _reached(forward, INPUT)
     output = graph.component(graph.output)
     source = graph.component(graph.input)
     if OUTPUT not in reached:
@@ -115,7 +130,7 @@ def structure_problems(causal: CausalBondGraph) -> list[Diagnostic]:
                 output.position,
             )
         ]
-    on_path = reached & (nx.ancestors(flow, OUTPUT) | {OUTPUT})
+    on_path = reached & (_reached(backward, OUTPUT) | {OUTPUT})
     brought = _unknowns_in(graph)
     entering: set[str] = set()
     for component in graph.components:
@@ -132,3 +147,14 @@ def structure_problems(causal: CausalBondGraph) -> list[Diagnostic]:
         for name in graph.unknowns
         if name not in entering
     ]
+
+
+def causal_for(graph: BondGraph, identify: bool = False) -> CausalBondGraph:
+    """Bond graph -> causal bond graph, free of structural problems: an output the input
+    does not reach; when the unknowns are to be identified (`identify`), an unknown that
+    cannot reach the output either."""
+    causal = assign(graph)
+    problems = [p for p in structure_problems(causal) if identify or p.kind == "unreachable_output"]
+    if problems:
+        raise ModelError(graph.source, problems)
+    return causal

@@ -1,11 +1,13 @@
-"""Stage 2: `ParsedModel` -> `BondGraph`, a validated networkx multigraph.
+"""Stage 2: `ParsedModel` -> `BondGraph`, a validated bond graph.
 
 The model's file and the files of its subsystems are read (`subsystems`), checked each in
 its own scope (`checks`) and assembled into one flat bond graph with dotted names
 (`flatten`); what concerns the whole model is checked here: the unknowns, the input and
-the output. One node per component and one edge per bond (tail -> head is the direction
-of positive power, keyed by the bond's number in model order). Validation reports every
-problem it can find in one pass, each with its kind, file and place.
+the output. Its components and bonds (tail -> head is the direction of positive power,
+numbered in model order) are kept as plain records, and each component's ports in
+order; `graph` gives the same as a networkx multigraph, built when asked for (networkx
+takes longer to import than `mtt check` takes to run). Validation reports every problem
+it can find in one pass, each with its kind, file and place.
 """
 
 from __future__ import annotations
@@ -14,17 +16,19 @@ from collections import defaultdict
 from dataclasses import dataclass, field
 from functools import cached_property
 from types import MappingProxyType
-
-import networkx as nx
-import sympy
+from typing import TYPE_CHECKING
 
 from mtt.language.checks import FileCheck
 from mtt.language.components import LIBRARY, PortRule, Role
 from mtt.language.diagnostics import Diagnostic, ModelError, Severity, Source, error
 from mtt.language.elements import Component, Parameter
+from mtt.language.expressions import Expression
 from mtt.language.flatten import Assembly, Bond, assemble
 from mtt.language.parse import ParsedModel, PortDecl
 from mtt.language.subsystems import Instance, load_tree
+
+if TYPE_CHECKING:
+    import networkx as nx
 
 __all__ = ["Bond", "BondGraph", "Component", "Parameter", "Port", "Selection", "build"]
 
@@ -53,7 +57,7 @@ class Subsystem:
 
     name: str  # dotted: motor, motor.brush
     file: str  # the file read, as reported
-    bindings: tuple[tuple[str, sympy.Expr], ...]  # the parameters its parent sets
+    bindings: tuple[tuple[str, Expression], ...]  # the parameters its parent sets
     description: str | None
 
 
@@ -62,7 +66,8 @@ class BondGraph:
     source: Source
     name: str
     description: str | None
-    graph: nx.MultiDiGraph
+    named: MappingProxyType  # name -> Component, in model order
+    bonds: tuple[Bond, ...]  # by number
     parameters: MappingProxyType  # name -> Parameter, in model order
     input: str
     output: str
@@ -73,28 +78,48 @@ class BondGraph:
     # each SS port -> the bond it joined
 
     def component(self, name: str) -> Component:
-        return self.graph.nodes[name]["component"]
+        return self.named[name]
 
     @property
     def components(self) -> tuple[Component, ...]:
-        return tuple(data["component"] for _, data in self.graph.nodes(data=True))
+        return tuple(self.named.values())
 
     @cached_property
-    def bonds(self) -> tuple[Bond, ...]:
-        edges = self.graph.edges(keys=True, data=True)
-        return tuple(sorted((data["bond"] for *_, data in edges), key=lambda b: b.number))
+    def graph(self) -> nx.MultiDiGraph:
+        """The bond graph as a networkx multigraph: a node per component (its `component`
+        attribute), an edge tail -> head per bond keyed by its number (`bond` attribute)."""
+        import networkx as nx
+
+        graph = nx.MultiDiGraph()
+        for name, component in self.named.items():
+            graph.add_node(name, component=component)
+        for bond in self.bonds:
+            graph.add_edge(bond.tail, bond.head, key=bond.number, bond=bond)
+        return graph
 
     @cached_property
     def _by_number(self) -> dict[int, Bond]:
         return {b.number: b for b in self.bonds}
 
+    @cached_property
+    def _ports(self) -> dict[str, tuple[Port, ...]]:
+        """Each component's bonds in port order: by bond number, a two-port's inward bond
+        first."""
+        inward: dict[str, list[Port]] = {name: [] for name in self.named}
+        outward: dict[str, list[Port]] = {name: [] for name in self.named}
+        for bond in self.bonds:
+            outward[bond.tail].append(Port(bond.number, False))
+            inward[bond.head].append(Port(bond.number, True))
+        ports = {}
+        for name, component in self.named.items():
+            both = inward[name] + outward[name]
+            two = component.type.ports is PortRule.TWO
+            ports[name] = tuple(both if two else sorted(both, key=lambda p: p.bond))
+        return ports
+
     def ports(self, name: str) -> tuple[Port, ...]:
         """A component's bonds in port order: by bond number, a two-port's inward bond first."""
-        inward = [Port(k, True) for _, _, k in self.graph.in_edges(name, keys=True)]
-        outward = [Port(k, False) for _, _, k in self.graph.out_edges(name, keys=True)]
-        if self.component(name).type.ports is PortRule.TWO:
-            return tuple(inward + outward)
-        return tuple(sorted(inward + outward, key=lambda p: p.bond))
+        return self._ports[name]
 
     def bond(self, number: int) -> Bond:
         return self._by_number[number]
@@ -230,16 +255,12 @@ def build(parsed: ParsedModel, selection: Selection | None = None) -> BondGraph:
     warnings = [w for check in checks.values() for w in check.warnings]
     if problems:
         raise ModelError(parsed.source, _once(problems + warnings))
-    graph = nx.MultiDiGraph()
-    for name, component in assembly.components.items():
-        graph.add_node(name, component=component)
-    for bond in assembly.bonds:
-        graph.add_edge(bond.tail, bond.head, key=bond.number, bond=bond)
     return BondGraph(
         source=parsed.source,
         name=parsed.header.name,
         description=parsed.header.description,
-        graph=graph,
+        named=MappingProxyType(dict(assembly.components)),
+        bonds=tuple(sorted(assembly.bonds, key=lambda b: b.number)),
         parameters=MappingProxyType(assembly.parameters),
         input=input_name,
         output=output_name,
@@ -250,7 +271,7 @@ def build(parsed: ParsedModel, selection: Selection | None = None) -> BondGraph:
                 instance.name,
                 instance.origin.source.name,
                 tuple(
-                    (b.name, assembly.parameters[f"{instance.name}.{b.name}"].value.value)
+                    (b.name, assembly.parameters[f"{instance.name}.{b.name}"].value)
                     for b in instance.declaration.bindings
                 ),
                 instance.declaration.description,

@@ -11,14 +11,12 @@ checked once the files are assembled (see `bondgraph`).
 from __future__ import annotations
 
 from collections import Counter
-
-import networkx as nx
-import sympy
+from graphlib import CycleError, TopologicalSorter
 
 from mtt.language.components import LIBRARY, ComponentType, PortRule, Role
 from mtt.language.diagnostics import Diagnostic, Origin, Position, error, warning
 from mtt.language.elements import Component, LocalBond, Parameter, signal_readable, unreadable
-from mtt.language.expressions import RESERVED, Expression, NameUse
+from mtt.language.expressions import RESERVED, Expression, name_expression
 from mtt.language.parse import ComponentUse, ParsedModel, PortUse
 from mtt.language.ports import SubsystemRules
 from mtt.language.subsystems import Instance
@@ -30,7 +28,7 @@ def _article(noun: str) -> str:
 
 def _implied_argument(use: ComponentUse) -> Expression:
     """`R:ra` means `R:ra(ra)`."""
-    return Expression(sympy.Symbol(use.name), (NameUse(use.name, use.position),), use.position)
+    return name_expression(use.name, use.position)
 
 
 class FileCheck(SubsystemRules):
@@ -247,15 +245,24 @@ class FileCheck(SubsystemRules):
                 self.report("bad_signal", unreadable(use, target.type), use.position)
 
     def check_cycles(self) -> None:
-        depends = nx.DiGraph()
-        for p in self.parameters.values():
-            depends.add_node(p.name)
-            for use in p.value.names if p.value else ():
-                if use.name in self.parameters:
-                    depends.add_edge(p.name, use.name)
-        for group in nx.strongly_connected_components(depends):
+        """Parameter values that depend on each other in a cycle: found by the standard
+        library's topological sort; networkx, which takes time to import, names each group
+        of them only when there is one."""
+        depends = {
+            p.name: {u.name for u in p.value.names if u.name in self.parameters}
+            if p.value
+            else set()
+            for p in self.parameters.values()
+        }
+        try:
+            TopologicalSorter(depends).prepare()
+            return
+        except CycleError:
+            import networkx as nx
+        graph = nx.DiGraph([(a, b) for a, targets in depends.items() for b in targets])
+        for group in nx.strongly_connected_components(graph):
             first = min(group, key=lambda n: self.parameters[n].position)
-            if len(group) > 1 or depends.has_edge(first, first):
+            if len(group) > 1 or graph.has_edge(first, first):
                 names = ", ".join(sorted(group))
                 self.report(
                     "cyclic_definition",

@@ -16,8 +16,10 @@ from __future__ import annotations
 from collections.abc import Callable
 from dataclasses import dataclass
 from enum import Enum
+from typing import TYPE_CHECKING
 
-import sympy
+if TYPE_CHECKING:  # the relations are written only by the derivation, which imports sympy
+    import sympy
 
 
 class Role(Enum):
@@ -76,7 +78,7 @@ class PortVariables:
         return 1 if self.inward[port] else -1
 
 
-Row = dict[str, sympy.Expr]
+Row = dict[str, "sympy.Expr"]
 Relation = Callable[[PortVariables], list[Row]]
 
 
@@ -94,12 +96,18 @@ class ComponentType:
     modulated: bool = False  # its argument, required, is a linear combination of signals
 
 
+def _integer(value: int) -> sympy.Integer:
+    import sympy
+
+    return sympy.Integer(value)
+
+
 def _source(on_effort: bool) -> Relation:
     def relation(v: PortVariables) -> list[Row]:
         variable = v.efforts[0] if on_effort else v.flows[0]
-        row = {variable: sympy.Integer(1)}
+        row = {variable: _integer(1)}
         if v.drive:
-            row[v.drive] = sympy.Integer(-1)
+            row[v.drive] = _integer(-1)
         return [row]
 
     return relation
@@ -109,9 +117,9 @@ def _modulated(on_effort: bool) -> Relation:
     """e (or f) = sum of coefficient * signal: the signals are other bonds' variables."""
 
     def relation(v: PortVariables) -> list[Row]:
-        row = {v.efforts[0] if on_effort else v.flows[0]: sympy.Integer(1)}
+        row = {v.efforts[0] if on_effort else v.flows[0]: _integer(1)}
         for variable, coefficient in v.signals:
-            row[variable] = row.get(variable, sympy.Integer(0)) - coefficient
+            row[variable] = row.get(variable, _integer(0)) - coefficient
         return [row]
 
     return relation
@@ -120,16 +128,16 @@ def _modulated(on_effort: bool) -> Relation:
 def _detector(reads_effort: bool) -> Relation:
     def relation(v: PortVariables) -> list[Row]:
         read, zero = (v.efforts[0], v.flows[0]) if reads_effort else (v.flows[0], v.efforts[0])
-        rows = [{zero: sympy.Integer(1)}]
+        rows = [{zero: _integer(1)}]
         if v.measure:
-            rows.append({v.measure: sympy.Integer(1), read: sympy.Integer(-1)})
+            rows.append({v.measure: _integer(1), read: _integer(-1)})
         return rows
 
     return relation
 
 
 def _resistor(v: PortVariables) -> list[Row]:
-    return [{v.efforts[0]: sympy.Integer(1), v.flows[0]: -v.parameter}]
+    return [{v.efforts[0]: _integer(1), v.flows[0]: -v.parameter}]
 
 
 def _storage(stored_by_effort: bool) -> Relation:
@@ -140,8 +148,8 @@ def _storage(stored_by_effort: bool) -> Relation:
             (v.efforts[0], v.flows[0]) if stored_by_effort else (v.flows[0], v.efforts[0])
         )
         return [
-            {v.energy: sympy.Integer(1), stored: -v.parameter},
-            {v.rate: sympy.Integer(1), rate: sympy.Integer(-1)},
+            {v.energy: _integer(1), stored: -v.parameter},
+            {v.rate: _integer(1), rate: _integer(-1)},
         ]
 
     return relation
@@ -149,7 +157,7 @@ def _storage(stored_by_effort: bool) -> Relation:
 
 def _transformer(v: PortVariables) -> list[Row]:
     """e1 = n e2, f2 = n f1 (port 0 is the inward bond)."""
-    one = sympy.Integer(1)
+    one = _integer(1)
     return [
         {v.efforts[0]: one, v.efforts[1]: -v.parameter},
         {v.flows[1]: one, v.flows[0]: -v.parameter},
@@ -158,7 +166,7 @@ def _transformer(v: PortVariables) -> list[Row]:
 
 def _gyrator(v: PortVariables) -> list[Row]:
     """e1 = r f2, e2 = r f1 (port 0 is the inward bond)."""
-    one = sympy.Integer(1)
+    one = _integer(1)
     return [
         {v.efforts[0]: one, v.flows[1]: -v.parameter},
         {v.efforts[1]: one, v.flows[0]: -v.parameter},
@@ -170,9 +178,9 @@ def _junction(common_effort: bool) -> Relation:
 
     def relation(v: PortVariables) -> list[Row]:
         common, summed = (v.efforts, v.flows) if common_effort else (v.flows, v.efforts)
-        one = sympy.Integer(1)
+        one = _integer(1)
         rows = [{name: one, common[0]: -one} for name in common[1:]]
-        rows.append({name: sympy.Integer(v.sign(i)) for i, name in enumerate(summed)})
+        rows.append({name: _integer(v.sign(i)) for i, name in enumerate(summed)})
         return rows
 
     return relation

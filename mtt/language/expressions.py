@@ -1,47 +1,33 @@
-"""Expressions of the .bg language: from parse tree to exact sympy values, node by node.
+"""Expressions of the .bg language: a small tree of their own, turned into sympy when used.
 
-The grammar's expression rules are transformed bottom-up here: numbers become exact
-Rationals, names become Symbols, operators become sympy operations, and no text from a
-model ever reaches eval, exec, sympify or parse_expr. Limits keep untrusted input from
-asking for astronomically large numbers.
+The parser builds every expression as a tree of frozen nodes (numbers are exact
+fractions, folded as they are read), measured as it is built (`measure`): the language
+stage checks names, signals and the limits of the implementation on these trees without
+importing sympy. A stage that computes (the derivation, reports) asks for `value`, the
+exact sympy object, built node by node from the tree: no text from a model ever reaches
+eval, exec, sympify or parse_expr.
 
 Signal terms `e(X)` and `f(X)` (the argument of a modulated source) become the Symbols
-`e(X)` and `f(X)`, which no parameter can be called; each partial expression also records
-whether it is still a linear combination of signals, and where it first stops being one.
+`e(X)` and `f(X)`, which no parameter can be called.
 """
 
 from __future__ import annotations
 
-import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field, replace
 from fractions import Fraction
+from functools import cached_property
+from typing import TYPE_CHECKING
 
-import sympy
-from lark import Token, Transformer
+from mtt.language.diagnostics import Position
 
-from mtt.language.diagnostics import Diagnostic, Position, error
+if TYPE_CHECKING:
+    import sympy
 
-FUNCTIONS = {
-    "sqrt": sympy.sqrt,
-    "exp": sympy.exp,
-    "log": sympy.log,
-    "sin": sympy.sin,
-    "cos": sympy.cos,
-}
-CONSTANTS = {"pi": sympy.pi}
+FUNCTIONS = ("sqrt", "exp", "log", "sin", "cos")
+CONSTANTS = ("pi",)
 SIGNALS = {"e": "effort", "f": "flow"}
 LAPLACE = "s"
 RESERVED = frozenset({LAPLACE, *FUNCTIONS, *CONSTANTS})
-
-# Exact arithmetic on untrusted input must not be asked to build astronomically
-# large numbers (`1e999999999`, `10^10^10`): these bounds keep every literal and
-# every numeric result to at most this many decimal digits. It stays below the
-# 4300 digits CPython converts between int and str by default (sys.int_info), so
-# every accepted value can still be printed.
-MAX_DIGITS = 4000
-# Roots and transcendental functions of a number make sympy look for perfect powers
-# and factors: quick for numbers of everyday size, minutes for thousands of digits.
-MAX_ROOT_DIGITS = 100
 
 
 @dataclass(frozen=True)
@@ -64,6 +50,8 @@ class SignalUse:
 
     @property
     def symbol(self) -> sympy.Symbol:
+        import sympy
+
         return sympy.Symbol(self.text)
 
 
@@ -75,216 +63,252 @@ class SignalProblem:
     position: Position
 
 
-@dataclass(frozen=True)
-class Expression:
-    """A parsed expression: its exact sympy value and every name it uses, with places.
+# The tree --------------------------------------------------------------------------
 
-    `signals` are its signal terms and `signal_problem` the first place where it is not a
-    linear combination of them (None when it is one, or has no signal at all).
+
+@dataclass(frozen=True)
+class Node:
+    position: Position
+
+
+@dataclass(frozen=True)
+class Number(Node):
+    value: Fraction
+
+
+@dataclass(frozen=True)
+class Name(Node):
+    name: str
+
+
+@dataclass(frozen=True)
+class Constant(Node):
+    name: str  # pi
+
+
+@dataclass(frozen=True)
+class Signal(Node):
+    kind: str
+    target: str
+
+
+@dataclass(frozen=True)
+class Call(Node):
+    function: str
+    argument: Node
+
+
+@dataclass(frozen=True)
+class Negative(Node):
+    operand: Node
+
+
+@dataclass(frozen=True)
+class Sum(Node):
+    """t1 ± t2 ± ...: each term with whether it is subtracted (a chain `a - b + c` is one
+    node; a parenthesised sum inside it is a term of its own)."""
+
+    terms: tuple[tuple[bool, Node], ...]
+
+
+@dataclass(frozen=True)
+class Product(Node):
+    """f1 */ f2 */ ...: each factor with whether it divides."""
+
+    factors: tuple[tuple[bool, Node], ...]
+
+
+@dataclass(frozen=True)
+class Power(Node):
+    base: Node
+    exponent: Node
+
+
+@dataclass(frozen=True)
+class Placeholder(Node):
+    """Stands where a problem was reported, so that no second error follows from it."""
+
+
+# Printing ------------------------------------------------------------------------------
+
+
+def _simple_number(node: Node) -> bool:
+    """A number that prints as a plain non-negative integer."""
+    return isinstance(node, Number) and node.value >= 0 and node.value.denominator == 1
+
+
+def _wrapped(node: Node, bare: tuple[type, ...]) -> str:
+    """The node's text, in parentheses unless it is a leaf or one of the `bare` kinds."""
+    leaf = isinstance(node, Name | Constant | Signal | Call | Placeholder) or _simple_number(node)
+    inner = text(node)
+    return inner if leaf or isinstance(node, bare) else f"({inner})"
+
+
+def text(node: Node) -> str:
+    """The expression as it could be written, with the parentheses it needs."""
+    if isinstance(node, Number):
+        value = node.value
+        return str(value.numerator) if value.denominator == 1 else str(value)
+    if isinstance(node, Name | Constant):
+        return node.name
+    if isinstance(node, Signal):
+        return f"{node.kind}({node.target})"
+    if isinstance(node, Call):
+        return f"{node.function}({text(node.argument)})"
+    if isinstance(node, Negative):
+        return "-" + _wrapped(node.operand, (Product, Power))
+    if isinstance(node, Sum):
+        (_, first), *rest = node.terms  # a chain starts with a term added
+        parts = [_wrapped(first, (Product, Power, Number))]
+        for subtracted, term in rest:
+            parts.append(
+                f" {'-' if subtracted else '+'} {_wrapped(term, (Product, Power, Number))}"
+            )
+        return "".join(parts)
+    if isinstance(node, Product):
+        (_, first), *rest = node.factors  # a chain starts with a factor multiplied
+        parts = [_wrapped(first, (Power, Product))]
+        for divides, factor in rest:
+            parts.append(
+                ("/" if divides else "*")
+                + _wrapped(factor, (Power,) if divides else (Power, Product))
+            )
+        return "".join(parts)
+    if isinstance(node, Power):
+        return f"{_wrapped(node.base, ())}^{_wrapped(node.exponent, (Power,))}"
+    return "?"
+
+
+# Conversion to sympy ---------------------------------------------------------------
+
+
+def to_sympy(node: Node) -> sympy.Expr:
+    """The exact sympy value of a tree (the tree is at most `MAX_DEPTH` deep)."""
+    import sympy
+
+    if isinstance(node, Number):
+        return sympy.Rational(node.value.numerator, node.value.denominator)
+    if isinstance(node, Name):
+        return sympy.Symbol(node.name)
+    if isinstance(node, Constant):
+        return sympy.pi
+    if isinstance(node, Signal):
+        return sympy.Symbol(f"{node.kind}({node.target})")
+    if isinstance(node, Call):
+        return getattr(sympy, node.function)(to_sympy(node.argument))
+    if isinstance(node, Negative):
+        return -to_sympy(node.operand)
+    if isinstance(node, Sum):
+        value = sympy.Integer(0)
+        for subtracted, term in node.terms:
+            value = value - to_sympy(term) if subtracted else value + to_sympy(term)
+        return value
+    if isinstance(node, Product):
+        value = sympy.Integer(1)
+        for divides, factor in node.factors:
+            value = value / to_sympy(factor) if divides else value * to_sympy(factor)
+        return value
+    if isinstance(node, Power):
+        return to_sympy(node.base) ** to_sympy(node.exponent)
+    return sympy.Dummy()
+
+
+def rename(node: Node, names: dict[str, str], signals: dict[str, str], where) -> Node:
+    """The tree with parameter names and signal targets renamed (`where` moves positions)."""
+    position = where(node.position)
+
+    def again(child: Node) -> Node:
+        return rename(child, names, signals, where)
+
+    if isinstance(node, Name):
+        return Name(position, names.get(node.name, node.name))
+    if isinstance(node, Signal):
+        return Signal(position, node.kind, signals.get(node.target, node.target))
+    if isinstance(node, Call):
+        return Call(position, node.function, again(node.argument))
+    if isinstance(node, Negative):
+        return Negative(position, again(node.operand))
+    if isinstance(node, Sum):
+        return Sum(position, tuple((sign, again(term)) for sign, term in node.terms))
+    if isinstance(node, Product):
+        return Product(position, tuple((sign, again(factor)) for sign, factor in node.factors))
+    if isinstance(node, Power):
+        return Power(position, again(node.base), again(node.exponent))
+    return replace(node, position=position)
+
+
+# The record ------------------------------------------------------------------------
+
+
+@dataclass(frozen=True)
+class Measure:
+    """What is known of an expression before any algebra, to keep it within the limits.
+
+    `exact` is its value when it is a rational number; `approx` a float value of a
+    constant that is not rational (pi, roots, functions); `degree` bounds the degrees of
+    its numerator and denominator in its atoms (names, signals, constants, functions)
+    once written as one fraction, `terms` their numbers of terms, and `digits` the
+    decimal digits of their coefficients; `depth` and `size` count its nodes.
     """
 
-    value: sympy.Expr
+    exact: Fraction | None = None
+    approx: float | None = None
+    degree: tuple[int, int] = (0, 0)
+    terms: tuple[int, int] = (1, 1)
+    digits: tuple[float, float] = (0.0, 0.0)
+    depth: int = 1
+    size: int = 1
+
+    @property
+    def constant(self) -> bool:
+        return self.exact is not None or self.approx is not None
+
+
+ATOM = Measure(degree=(1, 0))
+
+
+@dataclass(frozen=True)
+class Expression:
+    """A parsed expression: its tree, every name it uses with its place, its signal terms
+    and `signal_problem`, the first place where it is not a linear combination of them
+    (None when it is one, or has no signal at all)."""
+
+    tree: Node
     names: tuple[NameUse, ...]
     position: Position
     signals: tuple[SignalUse, ...] = ()
     signal_problem: SignalProblem | None = None
+    measure: Measure = field(default=ATOM, compare=False)
+
+    @cached_property
+    def value(self) -> sympy.Expr:
+        """The exact sympy value (Rationals, Symbols, sympy functions), built when asked."""
+        return to_sympy(self.tree)
+
+    @property
+    def exact(self) -> Fraction | None:
+        """The value when it is a rational number known without algebra."""
+        return self.measure.exact
+
+    def __str__(self) -> str:
+        return text(self.tree)
 
 
-def _number(text: str) -> sympy.Rational:
-    mantissa, _, exponent = text.lower().partition("e")
-    if len(mantissa) > MAX_DIGITS:
-        raise _ExpressionProblem("number has too many digits")
-    sign = -1 if exponent.startswith("-") else 1
-    exponent = exponent.lstrip("+-").lstrip("0") or "0"
-    if len(exponent) > len(str(MAX_DIGITS)):
-        raise _ExpressionProblem("number out of range")
-    value = Fraction(mantissa) * Fraction(10) ** (sign * int(exponent))
-    return sympy.Rational(value.numerator, value.denominator)
+def name_expression(name: str, position: Position) -> Expression:
+    """The expression made of one parameter name (`R:ra` means `R:ra(ra)`)."""
+    return Expression(Name(position, name), (NameUse(name, position),), position)
 
 
-def _digits(value: sympy.Expr) -> float:
-    """The decimal digits of the largest numerator or denominator among value's numbers."""
-    return max(
-        (math.log10(max(abs(r.p), abs(r.q), 1)) for r in value.atoms(sympy.Rational)), default=0
+def renamed(expression: Expression, prefix: str, parameters, where) -> Expression:
+    """A subsystem's expression as the whole model names it: its parameters and signal
+    targets prefixed, its places moved to its file by `where`."""
+    names = {u.name: prefix + u.name for u in expression.names if u.name in parameters}
+    signals = {u.target: prefix + u.target for u in expression.signals}
+    return Expression(
+        rename(expression.tree, names, signals, where),
+        tuple(NameUse(prefix + u.name, where(u.position)) for u in expression.names),
+        where(expression.position),
+        tuple(SignalUse(u.kind, prefix + u.target, where(u.position)) for u in expression.signals),
+        expression.signal_problem,
+        expression.measure,
     )
-
-
-class _ExpressionProblem(Exception):
-    """Raised inside the transformer; becomes a positioned `syntax` diagnostic."""
-
-
-def _at(token: Token) -> Position:
-    return Position(token.line, token.column)
-
-
-def _first_problem(*parts: Expression) -> SignalProblem | None:
-    return next((p.signal_problem for p in parts if p.signal_problem), None)
-
-
-def _nonlinear(message: str, *parts: Expression) -> SignalProblem | None:
-    """Where `parts` take no signal at all (a function's argument, a power, a denominator):
-    the problem is their first signal, or else any problem inside them."""
-    signals = [s for p in parts for s in p.signals]
-    return SignalProblem(message, signals[0].position) if signals else _first_problem(*parts)
-
-
-def _sum_problem(a: Expression, b: Expression) -> SignalProblem | None:
-    """A sum stays linear unless it adds a (nonzero) constant term to signal terms."""
-    first = _first_problem(a, b)
-    if first is not None or bool(a.signals) == bool(b.signals):
-        return first
-    constant = b if a.signals else a
-    if constant.value == 0:
-        return None
-    return SignalProblem(
-        "a constant term: every term must be a coefficient times one signal",
-        constant.position,
-    )
-
-
-def _product_problem(a: Expression, b: Expression) -> SignalProblem | None:
-    """A product stays linear when at most one factor holds signals."""
-    first = _first_problem(a, b)
-    if first is None and a.signals and b.signals:
-        return SignalProblem("a product of signals", b.signals[0].position)
-    return first
-
-
-def _binary(op, signal_problem):
-    def build(self, children: list[Expression]) -> Expression:
-        a, b = children
-        return self._result(
-            op(a.value, b.value),
-            a.names + b.names,
-            a.position,
-            a.signals + b.signals,
-            signal_problem(a, b),
-        )
-
-    return build
-
-
-class ExpressionRules(Transformer):
-    """The expression rules of the grammar; `problems` collects positioned syntax errors."""
-
-    def __init__(self, problems: list[Diagnostic]):
-        super().__init__()
-        self.problems = problems
-
-    def _result(self, value, names, position: Position, signals=(), problem=None) -> Expression:
-        """A computed value, unless it is undefined or too large: that is reported, and a
-        placeholder symbol stands in for it so that no second error follows from it."""
-        trouble = None
-        if value.has(sympy.nan, sympy.zoo, sympy.oo, -sympy.oo):
-            trouble = "the value is undefined or infinite"
-        elif _digits(value) > MAX_DIGITS:
-            trouble = "number out of range"
-        if trouble:
-            self.problems.append(error("syntax", trouble, position))
-            return Expression(sympy.Dummy(), names, position, signals, problem)
-        return Expression(value, names, position, signals, problem)
-
-    def number(self, children):
-        (token,) = children
-        try:
-            value = _number(str(token))
-        except _ExpressionProblem as problem:
-            self.problems.append(error("syntax", str(problem), _at(token)))
-            return Expression(sympy.Integer(0), (), _at(token))
-        return self._result(value, (), _at(token))
-
-    def name(self, children):
-        (token,) = children
-        if str(token) in CONSTANTS:
-            return Expression(CONSTANTS[str(token)], (), _at(token))
-        use = NameUse(str(token), _at(token))
-        return Expression(sympy.Symbol(str(token)), (use,), _at(token))
-
-    def _signal(self, token: Token, target: str | None, where: Position) -> Expression:
-        if target is None:
-            problem = SignalProblem(
-                f"{token}(...) reads a signal: its argument is a component's name", where
-            )
-            return Expression(sympy.Dummy(), (), _at(token), (), problem)
-        use = SignalUse(str(token), target, _at(token))
-        return Expression(use.symbol, (), _at(token), (use,))
-
-    def call(self, children):
-        token, argument = children
-        if str(token) in SIGNALS:
-            bare = (
-                len(argument.names) == 1
-                and not argument.signals
-                and argument.value == sympy.Symbol(argument.names[0].name)
-            )
-            return self._signal(token, argument.names[0].name if bare else None, argument.position)
-        function = FUNCTIONS.get(str(token))
-        if function is None:
-            known = " ".join(FUNCTIONS)
-            self.problems.append(
-                error("syntax", f"unknown function {str(token)!r} (known: {known})", _at(token))
-            )
-            return argument
-        if _digits(argument.value) > MAX_ROOT_DIGITS:
-            self.problems.append(error("syntax", f"argument of {token} out of range", _at(token)))
-            return argument
-        problem = _nonlinear("a signal inside a function", argument)
-        return self._result(
-            function(argument.value), argument.names, _at(token), argument.signals, problem
-        )
-
-    def signal_path(self, children):
-        """`e(a.b)`: a signal of a subsystem's component; other calls take no dotted name."""
-        token, path = children
-        if str(token) in SIGNALS:
-            return self._signal(token, str(path), _at(path))
-        self.problems.append(
-            error(
-                "syntax",
-                f"{path}: a dotted name only names a signal, in e(...) or f(...)",
-                _at(path),
-            )  # fmt: skip
-        )
-        return Expression(sympy.Integer(0), (), _at(token))
-
-    add = _binary(lambda a, b: a + b, _sum_problem)
-    sub = _binary(lambda a, b: a - b, _sum_problem)
-    mul = _binary(lambda a, b: a * b, _product_problem)
-
-    def div(self, children):
-        a, b = children
-        if b.value == 0:
-            self.problems.append(error("syntax", "division by zero", b.position))
-            return a
-        problem = _first_problem(a) or _nonlinear("a signal in a denominator", b)
-        return self._result(
-            a.value / b.value, a.names + b.names, a.position, a.signals + b.signals, problem
-        )
-
-    def neg(self, children):
-        (a,) = children
-        return Expression(-a.value, a.names, a.position, a.signals, a.signal_problem)
-
-    def pow(self, children):
-        base, operator, exponent = children
-        b, x = base.value, exponent.value
-        if isinstance(x, sympy.Number):
-            size = _digits(b) if isinstance(b, sympy.Number) else max(_digits(b), 1)
-            too_big = abs(x) * size > MAX_DIGITS or (b == 0 and x < 0)
-            too_big |= not x.is_Integer and _digits(b) > MAX_ROOT_DIGITS
-        else:
-            too_big = False
-        if too_big:
-            self.problems.append(error("syntax", "power out of range", _at(operator)))
-            return base
-        return self._result(
-            b**x,
-            base.names + exponent.names,
-            base.position,
-            base.signals + exponent.signals,
-            _nonlinear("a signal in a power", base, exponent),
-        )
-
-    def expression(self, children):
-        (partial,) = children
-        return partial

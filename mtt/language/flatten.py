@@ -13,13 +13,11 @@ from collections import defaultdict
 from dataclasses import dataclass
 from itertools import count
 
-import sympy
-
 from mtt.language.checks import FileCheck
 from mtt.language.components import Role
 from mtt.language.diagnostics import Diagnostic, Origin, Position, error
 from mtt.language.elements import Component, Parameter, signal_readable, unreadable
-from mtt.language.expressions import SIGNALS, Expression, NameUse, SignalUse
+from mtt.language.expressions import Expression, SignalUse, renamed
 from mtt.language.subsystems import Instance, relocate
 
 
@@ -51,31 +49,10 @@ class _Renamer:
     def position(self, position: Position | None) -> Position | None:
         return position if self.origin is None else relocate(position, self.origin)
 
-    def symbol(self, symbol: sympy.Symbol) -> sympy.Symbol:
-        name = symbol.name
-        if name in self.parameters:
-            return sympy.Symbol(self.prefix + name)
-        kind, _, rest = name.partition("(")
-        if kind in SIGNALS and rest.endswith(")"):
-            return sympy.Symbol(f"{kind}({self.prefix}{rest[:-1]})")
-        return symbol
-
     def expression(self, expression: Expression | None) -> Expression | None:
         if expression is None or not self.prefix:
             return expression
-        replacements = {s: self.symbol(s) for s in expression.value.free_symbols}
-        return Expression(
-            expression.value.xreplace(replacements),
-            tuple(
-                NameUse(self.prefix + u.name, self.position(u.position)) for u in expression.names
-            ),
-            self.position(expression.position),
-            tuple(
-                SignalUse(u.kind, self.prefix + u.target, self.position(u.position))
-                for u in expression.signals
-            ),
-            expression.signal_problem,
-        )
+        return renamed(expression, self.prefix, self.parameters, self.position)
 
 
 class _Assembler:

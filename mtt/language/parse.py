@@ -1,35 +1,34 @@
 """Stage 1: text -> parse tree -> `ParsedModel`.
 
-The grammar in `grammars/bg.lark` is run by lark; a transformer turns the tree
-into frozen dataclasses with source positions. Expressions become sympy objects
-built node by node from the tree (exact Rationals for decimal literals): no text
-from a model ever reaches eval, exec, sympify or parse_expr.
+The grammar in `grammars/bg.lark` is run by lark, one line at a time (no statement
+spans lines: each line's errors are found on their own, and the work is linear in the
+file's length); a transformer turns each line's tree into frozen dataclasses with
+source positions. Expressions become small trees of their own (`expressions`), exact
+and measured against the limits of the implementation; no text from a model ever
+reaches eval, exec, sympify or parse_expr, and this stage does not import sympy.
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass
 from functools import cache
+from typing import TYPE_CHECKING
 
 import lark
-import sympy
 from lark import Token
 
 from mtt.language.diagnostics import Diagnostic, ModelError, Position, Source, error
-from mtt.language.expressions import (
-    LAPLACE,
-    MAX_DIGITS,
-    RESERVED,
-    Expression,
-    ExpressionRules,
-    NameUse,
-    SignalUse,
-)
+from mtt.language.expression_rules import MAX_DIGITS, ExpressionRules
+from mtt.language.expressions import LAPLACE, RESERVED, Expression, NameUse, SignalUse
 from mtt.resources import resource_dir
+
+if TYPE_CHECKING:
+    import sympy
 
 __all__ = ["LAPLACE", "MAX_DIGITS", "RESERVED", "Expression", "NameUse", "SignalUse"]
 
 MAX_SYNTAX_ERRORS = 50
+MAX_LINE = 10_000  # characters: lark reads some 100000 a second
 
 
 @dataclass(frozen=True)
@@ -142,13 +141,9 @@ class ParsedModel:
 
 
 @cache
-def _parser(start: str) -> lark.Lark:
+def _parser() -> lark.Lark:
     grammar = (resource_dir("grammars") / "bg.lark").read_text(encoding="utf-8")
-    return lark.Lark(grammar, start=start, parser="lalr", propagate_positions=True)
-
-
-def _at(token: Token) -> Position:
-    return Position(token.line, token.column)
+    return lark.Lark(grammar, start=["line", "expression"], parser="lalr")
 
 
 def _describe_terminal(name: str, parser: lark.Lark) -> str:
@@ -190,7 +185,7 @@ def _syntax_message(exc: lark.exceptions.UnexpectedInput, parser: lark.Lark) -> 
 
 
 class _ToModel(ExpressionRules):
-    """Bottom-up: tokens and subtrees to sympy values and statement records."""
+    """Bottom-up: tokens and subtrees to expressions and statement records."""
 
     # statements
     @staticmethod
@@ -199,11 +194,11 @@ class _ToModel(ExpressionRules):
 
     def model_stmt(self, children):
         name, description = children
-        return ModelHeader(str(name), self._text(description), _at(name))
+        return ModelHeader(str(name), self._text(description), self.at(name))
 
     def _parameter(self, children, unknown: bool):
         name, value, description = children
-        return ParameterDecl(str(name), value, self._text(description), unknown, _at(name))
+        return ParameterDecl(str(name), value, self._text(description), unknown, self.at(name))
 
     def param_stmt(self, children):
         return self._parameter(children, unknown=False)
@@ -220,10 +215,10 @@ class _ToModel(ExpressionRules):
                     "syntax",
                     f"{token}: a subsystem's component is reached only through its ports "
                     "(NAME.PORT); dotted names are for input, output and signals",
-                    _at(token),
+                    self.at(token),
                 )
             )
-        return ComponentUse(type_, name, argument, _at(token))
+        return ComponentUse(type_, name, argument, self.at(token))
 
     def port_use(self, children):
         (token,) = children
@@ -233,14 +228,14 @@ class _ToModel(ExpressionRules):
                 error(
                     "syntax",
                     f"{token}: a bond reaches a subsystem through one of its own ports, NAME.PORT",
-                    _at(token),
+                    self.at(token),
                 )
             )
-        return PortUse(subsystem, port, _at(token))
+        return PortUse(subsystem, port, self.at(token))
 
     def binding(self, children):
         name, value = children
-        return Binding(str(name), value, _at(name))
+        return Binding(str(name), value, self.at(name))
 
     def bindings(self, children):
         return tuple(children)
@@ -248,7 +243,7 @@ class _ToModel(ExpressionRules):
     def subsystem_stmt(self, children):
         name, file, bindings, description = children
         return SubsystemDecl(
-            str(name), self._text(file), bindings or (), self._text(description), _at(name)
+            str(name), self._text(file), bindings or (), self._text(description), self.at(name)
         )
 
     def declaration(self, children):
@@ -259,14 +254,14 @@ class _ToModel(ExpressionRules):
         uses = children[::2]
         arrows = children[1::2]
         return [
-            BondText(tail, head, _at(arrow))
+            BondText(tail, head, self.at(arrow))
             for tail, head, arrow in zip(uses, uses[1:], arrows, strict=False)
         ]
 
     def _port(self, children, role: str):
         (token,) = children
         type_, _, name = str(token).partition(":")
-        return PortDecl(role, type_, name, _at(token))
+        return PortDecl(role, type_, name, self.at(token))
 
     def input_stmt(self, children):
         return self._port(children, "input")
@@ -275,35 +270,38 @@ class _ToModel(ExpressionRules):
         return self._port(children, "output")
 
 
-def _blank_line(text: str, line: int) -> str:
-    """The text with one line's content replaced by spaces: positions elsewhere stay put."""
-    lines = text.split("\n")
-    lines[line - 1] = " " * len(lines[line - 1])
-    return "\n".join(lines)
-
-
-def _parse_tree(source: Source) -> tuple[lark.Tree | None, list[Diagnostic]]:
-    """Parse, and on a syntax error blank the offending line and go on to find the others."""
-    parser = _parser("file")
-    text, problems = source.text, []
-    while True:
+def _statements(source: Source) -> tuple[list, list[Diagnostic]]:
+    """Every statement of the file, each line parsed on its own, and every syntax error
+    (up to `MAX_SYNTAX_ERRORS`)."""
+    parser = _parser()
+    statements: list = []
+    problems: list[Diagnostic] = []
+    for number, line in enumerate(source.text.split("\n"), start=1):
+        if len(problems) >= MAX_SYNTAX_ERRORS:
+            break
+        if len(line) > MAX_LINE:
+            problems.append(
+                error(
+                    "syntax",
+                    f"a line longer than {MAX_LINE} characters (a limit)",
+                    Position(number, MAX_LINE + 1),
+                )
+            )
+            continue
         try:
-            return parser.parse(text), problems
+            tree = parser.parse(line + "\n", start="line")
         except lark.exceptions.UnexpectedInput as exc:
-            position = Position(exc.line, exc.column) if exc.line > 0 else None
-            problems.append(error("syntax", _syntax_message(exc, parser), position))
-            if position is None or len(problems) >= MAX_SYNTAX_ERRORS:
-                return None, problems
-            text = _blank_line(text, position.line)
+            column = exc.column if exc.line > 0 else len(line) + 1
+            problems.append(error("syntax", _syntax_message(exc, parser), Position(number, column)))
+            continue
+        for item in _ToModel(problems, number).transform(tree).children:
+            statements.extend(item if isinstance(item, list) else [item])
+    return statements, problems
 
 
 def parse(source: Source) -> ParsedModel:
     """Read a model's text; raise `ModelError` with every syntax error found."""
-    tree, problems = _parse_tree(source)
-    statements: list = []
-    if tree is not None:
-        for item in _ToModel(problems).transform(tree).children:
-            statements.extend(item if isinstance(item, list) else [item])
+    statements, problems = _statements(source)
     header = None
     for index, statement in enumerate(statements):
         if isinstance(statement, ModelHeader):
@@ -348,12 +346,16 @@ def parse_expression(text: str, variables: frozenset[str] = frozenset({LAPLACE})
     """
     source = Source("<expression>", text)
     problems: list[Diagnostic] = []
+    parser = _parser()
+    if len(text) > MAX_LINE:
+        too_long = f"an expression longer than {MAX_LINE} characters (a limit)"
+        raise ModelError(source, [error("syntax", too_long, Position(1, MAX_LINE + 1))])
     try:
-        tree = _parser("expression").parse(text)
+        tree = parser.parse(text, start="expression")
     except lark.exceptions.UnexpectedInput as exc:
         position = Position(exc.line, exc.column) if exc.line > 0 else None
         raise ModelError(
-            source, [error("syntax", _syntax_message(exc, _parser("expression")), position)]
+            source, [error("syntax", _syntax_message(exc, parser), position)]
         ) from None
     partial = _ToModel(problems).transform(tree)
     for use in partial.names:

@@ -1,0 +1,165 @@
+"""Hostile and odd model text (issue 12, item 8): each class of input that once ended in an
+internal error or ran for seconds now ends in a located error of a documented kind, at
+once, or simply works. The time bounds are hang guards: each case takes milliseconds."""
+
+from __future__ import annotations
+
+import time
+
+import pytest
+import sympy
+
+from mtt.derivation.pipeline import transfer_for
+from mtt.language.diagnostics import ModelError, Position, Source
+from mtt.language.parse import MAX_LINE, parse
+
+HANG = 1.0  # seconds: every case here ends in a few milliseconds
+
+
+def model(argument: str, params: str = "unknown c = 1") -> str:
+    """An RC circuit whose resistor's argument is `argument`."""
+    return f"model m\n{params}\nSe:v -> 1:a\n1:a -> R:r({argument})\n1:a -> C:c\n1:a -> Df:y\n"
+
+
+def failure(text: str, tmp_path=None) -> tuple[ModelError, float]:
+    """The error the whole derivation of `text` raises, and how long it took."""
+    start = time.perf_counter()
+    with pytest.raises(ModelError) as caught:
+        if tmp_path is None:
+            parse(Source("test.bg", text))
+        else:
+            path = tmp_path / "test.bg"
+            path.write_text(text)
+            transfer_for(path)
+    return caught.value, time.perf_counter() - start
+
+
+def only(problem: ModelError) -> tuple[str, int, int, str]:
+    (error,) = problem.errors
+    return error.kind, error.position.line, error.position.column, error.message
+
+
+# --- the parser: nesting, size, degree, magnitude ----------------------------------------
+
+
+def test_ten_thousand_minus_signs_are_a_line_too_long():
+    problem, took = failure(model("-" * 10_000 + "c"))
+    assert only(problem)[:3] == ("syntax", 4, MAX_LINE + 1)
+    assert "longer than" in only(problem)[3] and took < HANG
+
+
+def test_deep_nesting_is_a_located_limit_not_a_recursion_error():
+    # 5000 minus signs fit on a line: lark reads them, the tree is built without recursion
+    problem, took = failure(model("-" * 5000 + "c"))
+    kind, line, column, message = only(problem)
+    assert (kind, line, column) == ("syntax", 4, 5012) and "nested more than" in message
+    assert took < HANG
+
+
+def test_minus_signs_before_a_number_fold_exactly():
+    (p,) = parse(Source("test.bg", "model m\nparam p = " + "-" * 5001 + "2\n")).parameters
+    assert p.value.exact == -2 and p.value.value == -2
+
+
+@pytest.mark.parametrize("count", [100_000, 4000])
+def test_many_parentheses(count):
+    text = "model m\nparam p = " + "(" * count + "1" + ")" * count + "\n"
+    start = time.perf_counter()
+    if count * 2 > MAX_LINE:
+        problem, _ = failure(text)
+        assert only(problem)[:2] == ("syntax", 2)
+    else:  # parentheses make no node: this is just 1
+        assert parse(Source("test.bg", text)).parameters[0].value.value == 1
+    assert time.perf_counter() - start < HANG
+
+
+def test_a_sum_of_ten_thousand_terms():
+    problem, took = failure(model("+".join(["c"] * 10_000)))
+    assert only(problem)[:2] == ("syntax", 4) and took < HANG
+    # one that fits on a line is over the size limit, at the term where it is exceeded
+    problem, took = failure(model("+".join(["c"] * 2000)))
+    kind, line, column, message = only(problem)
+    assert (kind, line) == ("syntax", 4) and "more than 1000 numbers" in message
+    assert took < HANG
+
+
+def test_a_product_of_a_thousand_names():
+    names = [f"p{i}" for i in range(1000)]
+    params = "unknown c = 1\n" + "\n".join(f"param {n}" for n in names)
+    problem, took = failure(model("*".join(names), params))
+    kind, line, column, message = only(problem)
+    assert (kind, line, column) == ("syntax", 1004, 12) and "degree above 100" in message
+    assert took < HANG
+
+
+@pytest.mark.parametrize(
+    ("argument", "column"),
+    [
+        ("c^500", 13),  # the operator
+        ("(c^10)^11", 18),
+        ("(1 + c)^60*(1 + c)^50", 13),  # the product, at its first operand
+        ("pi^500", 14),
+    ],
+)
+def test_high_powers_are_out_of_range(argument, column):
+    problem, took = failure(model(argument))
+    kind, line, column_, message = only(problem)
+    assert (kind, line, column_) == ("syntax", 4, column)
+    assert "degree above 100" in message and took < HANG
+
+
+def test_powers_that_expand_to_too_many_terms():
+    problem, _ = failure(
+        model("(a + b + c + d + e)^60", "unknown c\nparam a\nparam b\nparam d\nparam e")
+    )
+    assert "more than 10000 terms" in only(problem)[3]
+    # a binomial's power is small once expanded, and fine
+    parse(Source("test.bg", model("(1 + c)^100")))
+
+
+@pytest.mark.parametrize(
+    ("value", "message"),
+    [
+        ("exp(1e100)", "argument of exp out of range"),
+        ("exp(-1e100)", "argument of exp out of range"),
+        ("exp(" * 40 + "1" + ")" * 40, "argument of exp out of range"),
+        ("exp(exp(exp(2)))", "argument of exp out of range"),
+        ("pi * 10^400", "value out of range"),
+        ("sqrt(2)^2000", "out of range: degree above 100"),
+    ],
+)
+def test_huge_constants_are_out_of_range(value, message):
+    problem, took = failure(f"model m\nparam r = {value}\n")
+    kind, line, _, text = only(problem)
+    assert (kind, line) == ("syntax", 2) and message in text and took < HANG
+
+
+def test_exp_of_a_moderate_number_is_a_value():
+    (p,) = parse(Source("test.bg", "model m\nparam r = exp(exp(2))\n")).parameters
+    assert p.value.value == sympy.exp(sympy.exp(2))
+
+
+# --- values that are not real numbers ----------------------------------------------------
+
+
+@pytest.mark.parametrize(
+    ("argument", "column"),
+    [("sqrt(-1)", 12), ("log(-1)", 12), ("2*sqrt(-4)*c", 14), ("(-8)^(1/3)", 16)],
+)
+def test_values_that_are_not_real_are_located(argument, column):
+    problem, took = failure(model(argument))
+    kind, line, column_, message = only(problem)
+    assert (kind, line, column_) == ("bad_value", 4, column)
+    assert "not a real number" in message and took < HANG
+
+
+# --- the byte order mark -----------------------------------------------------------------
+
+
+def test_a_file_starting_with_a_byte_order_mark_is_read(tmp_path):
+    path = tmp_path / "bom.bg"
+    path.write_bytes(b"\xef\xbb\xbf" + model("2").encode())
+    assert transfer_for(path).denominator == 2 * sympy.Symbol("c") * sympy.Symbol("s") + 1
+    # text that still holds the mark (given to the parser directly) reads the same
+    parsed = parse(Source("bom.bg", "\ufeff" + model("2")))
+    assert parsed.header.name == "m" and parsed.header.position == Position(1, 8)
