@@ -101,7 +101,7 @@ absorber_cost: $(STAMP)
 # Benchmarks: each bench/*.py prints its table (bench/README.md keeps the current ones).
 .PHONY: bench
 bench: $(STAMP)
-	@for script in bench/*.py; do echo "== $$script"; $(BIN)/python $$script || exit 1; done
+	@for script in bench/[!_]*.py; do echo "== $$script"; $(BIN)/python $$script || exit 1; done
 
 clean:
 	rm -rf $(VENV) build dist .pytest_cache .ruff_cache

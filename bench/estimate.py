@@ -12,9 +12,11 @@ Agreement: the largest relative difference between the moments engine's k^ and t
 reference's, over every sample of every run (relative to max |k^| of the run, as k^ may
 cross zero).
 
-Times are medians of several runs (one run of the reference on the 10^5-sample record: it
-takes minutes). BLAS runs on one thread, as the reference does: on a shared machine,
-OpenBLAS's worker threads can stall a call for a scheduler quantum.
+Times are this process's CPU time (BLAS runs on one thread, as the reference does, so on
+an idle machine CPU time is wall time; on a shared one, wall time also counts the other
+processes, and OpenBLAS's worker threads can stall a call for a scheduler quantum), the
+median of several runs (one run of the reference on the 10^5-sample record: it takes
+minutes).
 
     .venv/bin/python bench/estimate.py          # all: a few minutes, mostly the reference
     .venv/bin/python bench/estimate.py --quick  # 10^4 instead of 10^5 samples
@@ -27,27 +29,16 @@ import os
 os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")  # before numpy loads OpenBLAS
 
 import argparse  # noqa: E402
-import importlib.util  # noqa: E402
 import math  # noqa: E402
 import statistics  # noqa: E402
-import sys  # noqa: E402
 import time  # noqa: E402
 from dataclasses import dataclass  # noqa: E402
-from pathlib import Path  # noqa: E402
 
 import numpy as np  # noqa: E402
+from _generated import generated  # noqa: E402
 from scipy.integrate import solve_ivp  # noqa: E402
 
-ROOT = Path(__file__).resolve().parent.parent
 RTOL, ATOL = 1e-6, 1e-9  # the reference's tolerances (the ODE engine's defaults)
-
-
-def generated(name: str):
-    spec = importlib.util.spec_from_file_location(name, ROOT / "generated" / f"{name}.py")
-    module = importlib.util.module_from_spec(spec)
-    sys.modules[name] = module
-    spec.loader.exec_module(module)
-    return module
 
 
 def reference(module, t, u, y, *, k0, C, beta=0.1, S0=1e-4) -> np.ndarray:
@@ -121,12 +112,12 @@ def experiments(quick: bool) -> list[Experiment]:
 
 
 def timed(function, repeat: int) -> tuple[float, object]:
-    """Median wall time of `repeat` calls, and the last result."""
+    """Median CPU time of `repeat` calls, and the last result."""
     times = []
     for _ in range(repeat):
-        start = time.perf_counter()
+        start = time.process_time()
         result = function()
-        times.append(time.perf_counter() - start)
+        times.append(time.process_time() - start)
     return statistics.median(times), result
 
 

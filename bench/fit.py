@@ -8,8 +8,8 @@ estimate for this noise. Against it: the generated module's `fit` (no starting v
 global minimiser of the filtered equation-error cost, C(s) = (1 + s)^5, beta = 0) and its
 `estimate` (the paper's algorithm from k0 = 5, beta = 0.1, S0 = 1e-4).
 
-Times are medians over the seeds; errors are the root mean square of k - 10 over the
-seeds. BLAS runs on one thread (see bench/estimate.py).
+Times are medians over the seeds, in this process's CPU time (BLAS on one thread: see
+bench/estimate.py); errors are the root mean square of k - 10 over the seeds.
 
     .venv/bin/python bench/fit.py [--seeds 20]
 """
@@ -21,24 +21,12 @@ import os
 os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")  # before numpy loads OpenBLAS
 
 import argparse  # noqa: E402
-import importlib.util  # noqa: E402
 import statistics  # noqa: E402
-import sys  # noqa: E402
 import time  # noqa: E402
-from pathlib import Path  # noqa: E402
 
 import numpy as np  # noqa: E402
+from _generated import generated  # noqa: E402
 from scipy import optimize, signal  # noqa: E402
-
-ROOT = Path(__file__).resolve().parent.parent
-
-
-def generated(name: str):
-    spec = importlib.util.spec_from_file_location(name, ROOT / "generated" / f"{name}.py")
-    module = importlib.util.module_from_spec(spec)
-    sys.modules[name] = module
-    spec.loader.exec_module(module)
-    return module
 
 
 def output_error(module, t, u, y, k0: float = 5.0) -> float:
@@ -68,9 +56,9 @@ def main() -> None:
     for seed in range(args.seeds):
         y = clean + np.random.default_rng(seed).uniform(-0.01, 0.01, t.size)
         for name, method in methods.items():
-            start = time.perf_counter()
+            start = time.process_time()
             k = method(y)
-            times[name].append(time.perf_counter() - start)
+            times[name].append(time.process_time() - start)
             errors[name].append(k - 10.0)
     baseline = statistics.median(times["output-error least squares (scipy)"])
     print(f"| method | median time | output-error time / time | rms error of k ({args.seeds} "

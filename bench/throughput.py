@@ -2,10 +2,10 @@
 
 Records are regular (0.001 s apart), with a square-wave input and, for fit and the
 Tracker, output noise uniform in +-0.01 (DC drive) or +-0.02 (absorber). Each figure is
-the median of several runs. fit's peak memory is measured in a fresh interpreter: the
-peak of numpy's allocations during the call (tracemalloc, which numpy reports to), and the
+the median of several runs, in this process's CPU time (BLAS on one thread: see
+bench/estimate.py). fit's peak memory is measured in a fresh interpreter: the peak of
+numpy's allocations during the call (tracemalloc, which numpy reports to), and the
 process's peak resident size (everything: the interpreter, numpy, scipy, the data).
-BLAS runs on one thread (see bench/estimate.py).
 
     .venv/bin/python bench/throughput.py
 """
@@ -16,27 +16,17 @@ import os
 
 os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")  # before numpy loads OpenBLAS
 
-import importlib.util  # noqa: E402
 import json  # noqa: E402
 import statistics  # noqa: E402
 import subprocess  # noqa: E402
 import sys  # noqa: E402
 import time  # noqa: E402
-from pathlib import Path  # noqa: E402
 
 import numpy as np  # noqa: E402
+from _generated import ROOT, generated  # noqa: E402
 
-ROOT = Path(__file__).resolve().parent.parent
 TARGETS = {"simulate": 1e7, "fit": 5e6, "Tracker, one sample at a time": 2e4,
            "Tracker, chunks of 1000": 1e6}  # fmt: skip
-
-
-def generated(name: str):
-    spec = importlib.util.spec_from_file_location(name, ROOT / "generated" / f"{name}.py")
-    module = importlib.util.module_from_spec(spec)
-    sys.modules[name] = module
-    spec.loader.exec_module(module)
-    return module
 
 
 def record(module, k: float, samples: int, noise: float, seed: int = 0):
@@ -50,9 +40,9 @@ def rate(function, samples: int, repeat: int = 5) -> float:
     """Median samples per second of `repeat` calls."""
     times = []
     for _ in range(repeat):
-        start = time.perf_counter()
+        start = time.process_time()
         function()
-        times.append(time.perf_counter() - start)
+        times.append(time.process_time() - start)
     return samples / statistics.median(times)
 
 

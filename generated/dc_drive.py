@@ -529,6 +529,7 @@ def _propagate(Phi, Gamma, ends, z0, index=None, out=None) -> np.ndarray:
 EPS = float(np.finfo(float).eps)
 NOISE = 10.0  # rounding noise: within NOISE (1 + memory / step) eps of the terms it sums
 ROUNDING = 16 * EPS
+SETTLED = 0.1 * math.sqrt(EPS)  # a Newton step this small (relative) leaves rounding
 
 
 def _cost_forms(Theta: np.ndarray) -> np.ndarray:
@@ -601,7 +602,9 @@ def _newton(P: np.ndarray, k, iterations: int = 12) -> tuple[np.ndarray, np.ndar
     """Stationary points of each row near k by Newton's method: (points, converged).
 
     Converged means J_1 is within rounding of the terms it sums where J_2 > 0 (near a local
-    minimum); one more step polishes it. Rows that do not converge are left as they are.
+    minimum), or the step was below sqrt(eps) relative (Newton's error is then about its
+    square: below rounding); the step is taken either way. Rows that do not converge are
+    left as they are.
     """
     k = np.array(np.broadcast_to(k, P.shape[:-1]), dtype=float)
     done = np.zeros(k.shape, dtype=bool)
@@ -610,7 +613,7 @@ def _newton(P: np.ndarray, k, iterations: int = 12) -> tuple[np.ndarray, np.ndar
         first, second, size = _slopes(P, k, sizes)
         ok = second > 0
         step = np.where(ok, -first / np.where(ok, second, 1.0), 0.0)
-        settled = ok & (np.abs(first) <= ROUNDING * size)
+        settled = ok & ((np.abs(first) <= ROUNDING * size) | (np.abs(step) <= SETTLED * np.abs(k)))
         k = np.where(done, k, k + step)
         done |= settled
         if done.all():
@@ -875,7 +878,9 @@ class _Run:
                 first, second, size = _slopes(P, k)
                 if not second > 0:
                     return False
-                k, settled = k - first / second, abs(first) <= ROUNDING * size
+                step = -first / second
+                settled = abs(first) <= ROUNDING * size or abs(step) <= SETTLED * abs(k)
+                k += step
                 if settled:
                     break
             else:

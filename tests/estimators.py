@@ -54,18 +54,25 @@ def noisy_absorber(absorber):
     return t, u, y
 
 
-def exact_cost(module, t, u, y, *, k0, beta, S0, C, upto: int, refine: int = 10) -> Polynomial:
+def exact_cost(
+    module, t, u, y, *, k0, beta, S0, C, upto: int, refine: int = 10, hold: str = "linear"
+) -> Polynomial:
     """J(k, t[upto]) as a polynomial in k, from the definition (method.md section 3).
 
     The filtered data come from scipy's exact first-order-hold simulation of s^i/C(s) on a
     grid `refine` times finer than the samples (the interpolated data are piecewise linear,
-    so this is exact), and the weighted integral from Simpson's rule on that grid.
+    so this is exact; a held input is held on the fine grid, whose last point in each
+    interval is one fine step from the next sample), and the weighted integral from
+    Simpson's rule on that grid.
     """
     fine = np.linspace(t[0], t[upto], upto * refine + 1)
     c = module.filter_polynomial(C)
     rows = []
+    held = u[np.minimum(np.searchsorted(t, fine, "right") - 1, upto)]
     for signal_samples, degree in ((y, module.n), (u, module.m)):
         data = np.interp(fine, t, signal_samples)
+        if hold == "zoh" and signal_samples is u:
+            data = held
         for i in range(degree + 1):
             numerator = np.r_[1.0, np.zeros(i)]  # s^i
             rows.append(signal.lsim((numerator, c), data, fine)[1])

@@ -249,3 +249,18 @@ def test_bad_input_to_a_tracker(dc_drive):
     with pytest.raises(ValueError, match=r"must have the same length, not \[2, 2, 1\]"):
         tracker.update([0.2, 0.3], [1.0, 1.0], [0.0])
     assert tracker.t == 0.1  # nothing taken from the refused updates
+
+
+def test_a_held_input_is_exact_even_for_a_fast_filter(dc_drive):
+    """zoh: the input jumps at every sample. The cost from its definition, on a grid fine
+    enough that the held input's jumps sit one fine step from the samples (an error of
+    order 1/refine^2 in Simpson's rule there), agrees with the engine's exact cost."""
+    t = np.linspace(0.0, 3.0, 61)
+    u = np.sign(np.sin(4.0 * t)) + 0.5
+    y = dc_drive.simulate(t, u, 10.0, hold="zoh")
+    settings = dict(k0=5.0, beta=0.1, S0=1e-4, C=0.05)
+    result = dc_drive.estimate(t, u, y, **settings, hold="zoh")
+    k = np.linspace(0.0, 20.0, 9)
+    cost = exact_cost(dc_drive, t, u, y, **settings, upto=t.size - 1, refine=400, hold="zoh")
+    expected = cost(k) - cost(result.k)
+    np.testing.assert_allclose(result.cost(k), expected, rtol=1e-3, atol=1e-6 * expected.max())
