@@ -936,14 +936,15 @@ class _Run:
         noise = setup.noise(rows[:, :width])
         quiet = setup.quiet(noise, steps.values if steps.index is None else steps.at(steps.values))
         self.noise = (noise[0][-1:], noise[1][-1:])
-        q[quiet] = 0.0
+        if quiet.any():
+            q[quiet] = 0.0
         if not quiet.all():
             self.informed = times[1 + np.flatnonzero(~quiet)[-1]]
         # the discounted sums, all scaled by exp(-top) so that nothing overflows
         offset = times[1:] - times[0]
-        with np.errstate(divide="ignore"):
-            size = np.log(np.abs(q).max(1))
-        top = max(self.log_scale, float(np.max(setup.beta * offset + size)))
+        largest = float(np.abs(q).max())
+        top = self.log_scale if largest == 0 else max(self.log_scale, math.log(largest))
+        top += setup.beta * offset[-1]
         start = self.P * math.exp(self.log_scale - top)
         E = np.cumsum(q * np.exp(setup.beta * offset - top)[:, None], 0) + start
         log_scale = top - setup.beta * offset
