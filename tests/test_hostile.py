@@ -9,6 +9,7 @@ import time
 import pytest
 import sympy
 
+from mtt.derivation.causality import assign
 from mtt.derivation.pipeline import transfer_for
 from mtt.language.diagnostics import ModelError, Position, Source
 from mtt.language.parse import MAX_LINE, parse
@@ -163,3 +164,58 @@ def test_a_file_starting_with_a_byte_order_mark_is_read(tmp_path):
     # text that still holds the mark (given to the parser directly) reads the same
     parsed = parse(Source("bom.bg", "\ufeff" + model("2")))
     assert parsed.header.name == "m" and parsed.header.position == Position(1, 8)
+
+
+# --- causality: near-linear in the number of bonds ----------------------------------------
+
+
+def junction(bonds: int) -> str:
+    """A 1-junction with `bonds` bonds: a source, a sensor and inertias (all but one of
+    them dependent)."""
+    lines = ["model big", "param m = 1", "Se:v -> 1:j", "1:j -> Df:y"]
+    lines += [f"1:j -> I:m{i}(m)" for i in range(bonds - 2)]
+    return "\n".join(lines) + "\n"
+
+
+def ladder(stages: int, conflict: bool = False) -> str:
+    """An RC ladder (four bonds a stage); with `conflict`, also two 1-junctions each bonded
+    to the same three 0-junctions, which no causality suits: three 0-junctions need their
+    effort from one bond each, and only two 1-junctions can give one."""
+    lines = ["model ladder", "param r = 1", "param c = 1", "Se:v -> 1:s0"]
+    for i in range(stages):
+        lines += [f"1:s{i} -> R:r{i}(r)", f"1:s{i} -> 0:p{i}", f"0:p{i} -> C:c{i}(c)"]
+        lines += [f"0:p{i} -> 1:s{i + 1}"]
+    lines += [f"1:s{stages} -> De:y"]
+    if conflict:
+        lines += [f"1:{a} -> 0:{b}" for a in ("ka", "kb") for b in ("kx", "ky", "kz")]
+    return "\n".join(lines) + "\n"
+
+
+def test_a_junction_with_many_bonds(models):
+    graph = models.build(junction(300))
+    start = time.perf_counter()
+    causal = assign(graph)
+    assert time.perf_counter() - start < HANG
+    assert len(causal.dependent) == 297 and causal.integral("m0")
+
+
+def test_a_conflict_behind_a_long_chain_of_choices_is_found_at_once(models):
+    # every C and R of the ladder is a free choice made before the bonds of the clash: plain
+    # backtracking would try their 2^300 combinations (it gave up after 10000 trials, in 2 s)
+    graph = models.build(ladder(150, conflict=True))
+    start = time.perf_counter()
+    with pytest.raises(ModelError) as caught:
+        assign(graph)
+    assert time.perf_counter() - start < HANG
+    (problem,) = caught.value.errors
+    assert problem.kind == "causal_conflict" and "1:ka" in problem.message
+    assert problem.position.line > 600  # at one of the junctions of the clash
+
+
+def test_causality_of_a_thousand_bonds(models):
+    graph = models.build(ladder(250))
+    assert len(graph.bonds) == 1002
+    start = time.perf_counter()
+    causal = assign(graph)
+    assert time.perf_counter() - start < HANG
+    assert causal.dependent == () and causal.loops == ()

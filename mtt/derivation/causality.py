@@ -10,12 +10,20 @@ derivative causality is a dependent state; each arbitrary resistor choice marks 
 algebraic loop. When a choice leads to a conflict later, the procedure backtracks to try
 the other causality, so a causal assignment is found whenever one exists. Two elements
 imposing the same variable (no assignment at all) is a `causal_conflict`.
+
+The work is near-linear in the number of bonds: a junction keeps counts of its bonds
+still open and of those that carry its common variable in, so that propagating through
+it costs O(1) per bond; choices are undone from a trail, not by copying the assignment;
+and backtracking is conflict-directed: every forced bond remembers the bonds that forced
+it, so a conflict names the choices it follows from, and the search jumps back to the
+latest of those, over every choice that had nothing to do with it (Prosser's conflict-
+directed backjumping: the assignment found is the one plain backtracking finds).
 """
 
 from __future__ import annotations
 
 from collections import deque
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from types import MappingProxyType
 
 from mtt.language.bondgraph import BondGraph, Component
@@ -23,7 +31,7 @@ from mtt.language.components import CausalKind, PortRule, Role
 from mtt.language.diagnostics import ModelError, error
 
 # Backtracking over free causal choices gives up (with the first conflict) after this many
-# failed attempts: the search is exponential in the worst case.
+# failed attempts: the search can still be exponential in the worst case.
 MAX_TRIALS = 10_000
 
 
@@ -47,9 +55,12 @@ class CausalBondGraph:
 
 
 class _Conflict(Exception):
-    def __init__(self, component: Component, message: str):
+    """Two elements impose one variable; `bonds` are the bonds the clash is made of."""
+
+    def __init__(self, component: Component, message: str, bonds: tuple[int, ...]):
         super().__init__(message)
         self.component = component
+        self.bonds = bonds
 
 
 def _model_error(graph: BondGraph, conflict: _Conflict) -> ModelError:
@@ -59,29 +70,39 @@ def _model_error(graph: BondGraph, conflict: _Conflict) -> ModelError:
 
 
 class _Assignment:
-    """A partial causal assignment, propagated to a fixed point after every choice."""
+    """A partial causal assignment, propagated to a fixed point after every choice, with
+    the trail of its bonds in the order they were set (and why), to undo choices."""
 
     def __init__(self, graph: BondGraph):
         self.graph = graph
         self.effort_from: dict[int, str] = {}
         self.cause: dict[int, str] = {}  # bond -> the component whose choice set it
+        self.level: dict[int, int] = {}  # bond -> the number of choices made when it was set
+        self.reasons: dict[int, tuple[int, ...]] = {}  # bond -> the bonds that forced it
+        self.trail: list[int] = []
         self.choosing = ""
-        self.chosen: tuple[str, ...] = ()  # components whose causality was a free choice
+        self.depth = 0  # choices made
+        self.ports = {c.name: tuple(p.bond for p in graph.ports(c.name)) for c in graph.components}
+        # for each junction: its bonds not set yet, and those with `imposes == special`
+        self.open = {name: len(bonds) for name, bonds in self.ports.items()}
+        self.special = dict.fromkeys(self.ports, 0)
 
-    def copy(self) -> _Assignment:
-        other = _Assignment(self.graph)
-        other.effort_from, other.cause = dict(self.effort_from), dict(self.cause)
-        other.chosen = self.chosen
-        return other
+    def _special(self, component: str, bond: int) -> bool:
+        """Does this bond bring the junction's common variable in (0: effort, 1: flow)?"""
+        return (
+            self.imposes(component, bond)
+            == self.graph.component(component).type.causality.imposes_effort
+        )
 
-    def _conflict(self, bonds: list[int], what: str, claimant: str) -> _Conflict:
+    def _conflict(self, bonds: list[int], what: str, claimant: str, because=()) -> _Conflict:
         """Name the elements whose choices collide (not just the junction where they meet)."""
         if self.graph.component(claimant).type.ports is not PortRule.ONE:
             claimant = self.choosing
         causes = list(dict.fromkeys([self.cause[b] for b in bonds if b in self.cause] + [claimant]))
         labels = " and ".join(self.graph.component(c).label for c in causes)
         verb = "both impose" if len(causes) > 1 else "imposes"
-        return _Conflict(self.graph.component(causes[-1]), f"{labels} {verb} {what}")
+        message = f"{labels} {verb} {what}"
+        return _Conflict(self.graph.component(causes[-1]), message, (*bonds, *because))
 
     def imposes(self, component: str, bond: int) -> bool | None:
         owner = self.effort_from.get(bond)
@@ -95,57 +116,98 @@ class _Assignment:
         """Set one bond's causality and propagate; raise `_Conflict` if that is impossible."""
         queue = deque()
         self.choosing = component
-        self._set(component, bond, imposes_effort, queue)
+        self._set(component, bond, imposes_effort, queue, ())
         while queue:
             self._propagate(queue.popleft(), queue)
 
-    def _set(self, component: str, bond: int, imposes_effort: bool, queue: deque) -> None:
+    def _set(self, component, bond, imposes_effort: bool, queue: deque, because) -> None:
         owner = component if imposes_effort else self._other_end(component, bond)
         current = self.effort_from.get(bond)
         if current is None:
             self.effort_from[bond] = owner
             self.cause[bond] = self.choosing
-            queue.extend((component, self._other_end(component, bond)))
+            self.level[bond] = self.depth
+            self.reasons[bond] = because
+            self.trail.append(bond)
+            ends = (component, self._other_end(component, bond))
+            for end in ends:
+                self.open[end] -= 1
+                self.special[end] += self._special(end, bond)
+            queue.extend(ends)
         elif current != owner:
             b = self.graph.bond(bond)
             ends = f"{self.graph.component(b.tail).label} -> {self.graph.component(b.head).label}"
             variable = "effort" if imposes_effort else "flow"
-            raise self._conflict([bond], f"the {variable} on bond {bond} ({ends})", component)
+            what = f"the {variable} on bond {bond} ({ends})"
+            raise self._conflict([bond], what, component, because)
+
+    def undo(self, mark: int) -> None:
+        """Unset every bond set since the trail had `mark` bonds."""
+        while len(self.trail) > mark:
+            bond = self.trail[-1]
+            b = self.graph.bond(bond)
+            for end in (b.tail, b.head):
+                self.open[end] += 1
+                self.special[end] -= self._special(end, bond)
+            self.trail.pop()
+            for record in (self.effort_from, self.cause, self.level, self.reasons):
+                del record[bond]
 
     def _propagate(self, name: str, queue: deque) -> None:
         component = self.graph.component(name)
         rule = component.type.causality
-        ports = [p.bond for p in self.graph.ports(name)]
-        states = [self.imposes(name, b) for b in ports]
+        ports = self.ports[name]
         if rule.kind is CausalKind.FIXED:
-            self._set(name, ports[0], rule.imposes_effort, queue)
+            self._set(name, ports[0], rule.imposes_effort, queue, ())
         elif rule.kind in (CausalKind.SAME, CausalKind.OPPOSITE):
-            known = [(b, v) for b, v in zip(ports, states, strict=True) if v is not None]
+            known = [b for b in ports if b in self.effort_from]
             if known:
-                bond, value = known[0]
+                bond = known[0]
                 other = ports[1] if bond == ports[0] else ports[0]
-                self._set(name, other, value if rule.kind is CausalKind.SAME else not value, queue)
+                value = self.imposes(name, bond)
+                same = rule.kind is CausalKind.SAME
+                self._set(name, other, value if same else not value, queue, (bond,))
         elif rule.kind is CausalKind.EXACTLY_ONE:
-            self._junction(name, component, ports, states, rule.imposes_effort, queue)
+            self._junction(name, component, ports, rule.imposes_effort, queue)
 
-    def _junction(self, name, component, ports, states, special, queue) -> None:
+    def _junction(self, name, component, ports, special, queue) -> None:
         """Exactly one bond of a junction has `imposes == special` (0: effort in; 1: flow in)."""
-        chosen = [b for b, v in zip(ports, states, strict=True) if v == special]
-        free = [b for b, v in zip(ports, states, strict=True) if v is None]
+        count, open_ = self.special[name], self.open[name]
+        if count == 1 and not open_ or count == 0 and open_ > 1:
+            return
         variable = "effort" if component.type.name == "0" else "flow"
-        if len(chosen) > 1:
+        if count > 1:
+            chosen = [b for b in ports if self.imposes(name, b) == special]
             raise self._conflict(chosen, f"the {variable} of {component.label}", name)
-        if chosen:
-            for bond in free:
-                self._set(name, bond, not special, queue)
-        elif len(free) == 1:
-            self._set(name, free[0], special, queue)
-        elif not free:
+        if count == 1:
+            (bond,) = [b for b in ports if self.imposes(name, b) == special]
+            for other in [b for b in ports if b not in self.effort_from]:
+                self._set(name, other, not special, queue, (bond,))
+        elif open_ == 1:
+            (bond,) = [b for b in ports if b not in self.effort_from]
+            self._set(name, bond, special, queue, tuple(b for b in ports if b != bond))
+        else:
             raise self._conflict(
-                ports,
+                list(ports),
                 f"causality that leaves the {variable} of {component.label} undetermined",
                 name,
             )
+
+    def culprits(self, conflict: _Conflict) -> set[int]:
+        """The choices (numbered from 1) a conflict follows from: the levels of the choices
+        found by following the bonds that forced each of its bonds back to choices."""
+        levels, seen, stack = set(), set(), list(conflict.bonds)
+        while stack:
+            bond = stack.pop()
+            if bond in seen or self.level.get(bond, 0) == 0:
+                continue
+            seen.add(bond)
+            reasons = self.reasons[bond]
+            if reasons:
+                stack.extend(reasons)
+            else:  # set by a choice itself
+                levels.add(self.level[bond])
+        return levels
 
 
 def assign(graph: BondGraph) -> CausalBondGraph:
@@ -164,7 +226,7 @@ def assign(graph: BondGraph) -> CausalBondGraph:
         except _Conflict as conflict:
             raise _model_error(graph, conflict) from None
 
-    state = _complete(state, _decisions(graph, by_role))
+    chosen = _complete(state, _decisions(graph, by_role))
     dependent = tuple(
         c.name
         for c in by_role[Role.STORAGE]
@@ -174,7 +236,7 @@ def assign(graph: BondGraph) -> CausalBondGraph:
         graph,
         MappingProxyType(dict(sorted(state.effort_from.items()))),
         dependent,
-        tuple(c for c in state.chosen if graph.component(c).type.role is Role.RESISTOR),
+        tuple(c for c in chosen if graph.component(c).type.role is Role.RESISTOR),
     )
 
 
@@ -192,42 +254,60 @@ def _decisions(graph: BondGraph, by_role: dict) -> list[tuple[str, int, bool]]:
     return choices + [(b.tail, b.number, True) for b in graph.bonds]
 
 
-def _complete(state: _Assignment, decisions: list[tuple[str, int, bool]]) -> _Assignment:
-    """Make the decisions in order, preferred causality first, backtracking on a conflict.
+@dataclass
+class _Frame:
+    """A choice being made: which decision, the trail before it, the values left to try,
+    and the earlier choices (levels) that its failures so far follow from."""
+
+    index: int
+    mark: int
+    values: list[bool]
+    culprits: set[int] = field(default_factory=set)
+
+
+def _complete(state: _Assignment, decisions: list[tuple[str, int, bool]]) -> list[str]:
+    """Make the decisions in order, preferred causality first, backtracking on a conflict;
+    return the components whose causality was chosen, in order.
 
     The sequential procedure alone can paint itself into a corner (a choice that only a
     later conflict shows to be wrong); backtracking finds an assignment whenever one exists
-    (within `MAX_TRIALS` attempts) and otherwise reports the first conflict met, which is
-    the one the sequential procedure reports.
+    (within `MAX_TRIALS` failed attempts) and otherwise reports the first conflict met,
+    which is the one the sequential procedure reports. A choice whose values both fail is
+    blamed on the latest earlier choice its conflicts follow from: the choices in between
+    are not tried again, as they would fail in the same way.
     """
-    graph = state.graph
-    conflicts: list[_Conflict] = []
-    # one frame per decision taken: the state before it, its index, the values left to try
-    frames: list[tuple[_Assignment, int, list[bool]]] = []
-    index = 0
+    frames: list[_Frame] = []
+    first: _Conflict | None = None
+    trials, index = 0, 0
     while True:
         while index < len(decisions) and state.imposes(*decisions[index][:2]) is not None:
             index += 1
         if index == len(decisions):
-            return state
-        frames.append((state, index, [decisions[index][2], not decisions[index][2]]))
-        state = None
-        while frames and state is None and len(conflicts) <= MAX_TRIALS:
-            before, at, values = frames[-1]
-            if not values:
-                frames.pop()
+            return [decisions[frame.index][0] for frame in frames]
+        preferred = decisions[index][2]
+        frames.append(_Frame(index, len(state.trail), [preferred, not preferred]))
+        while True:
+            frame = frames[-1]
+            if not frame.values:  # both values fail: back to the latest culprit
+                if not frame.culprits or trials > MAX_TRIALS:
+                    raise _model_error(state.graph, first)
+                target = max(frame.culprits)
+                culprits = frame.culprits - {target}
+                del frames[target:]
+                frames[-1].culprits |= culprits
                 continue
-            component, bond, _ = decisions[at]
-            trial = before.copy()
+            component, bond, _ = decisions[frame.index]
+            state.undo(frame.mark)
+            state.depth = len(frames)
             try:
-                trial.choose(component, bond, values.pop(0))
+                state.choose(component, bond, frame.values.pop(0))
             except _Conflict as conflict:
-                conflicts.append(conflict)
+                trials += 1
+                first = first or conflict
+                frame.culprits |= state.culprits(conflict) - {len(frames)}
                 continue
-            trial.chosen = before.chosen + (component,)
-            state, index = trial, at + 1
-        if state is None:
-            raise _model_error(graph, conflicts[0])
+            break
+        index = frame.index + 1
 
 
 def describe(causal: CausalBondGraph) -> str:
