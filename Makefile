@@ -47,6 +47,8 @@ COMPILE_OPTIONS_absorber_stages := --keep tau,l
 # The two-unknown DC motor: estimators of several unknowns are to come (issue 11); until
 # then its estimator identifies the load inertia, with the armature resistance known.
 COMPILE_OPTIONS_dc_motor := --unknown jl
+# The same for the series RLC circuit with three unknowns: its estimator identifies c.
+COMPILE_OPTIONS_rlc3 := --unknown c
 GENERATED := $(patsubst models/%.bg,generated/%.py,$(MODELS))
 
 compile: $(GENERATED)
