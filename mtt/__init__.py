@@ -14,6 +14,7 @@ from mtt.language.diagnostics import MttError
 __version__ = "0.1.0"
 __all__ = [
     "Causality",
+    "Identifiability",
     "Model",
     "MttError",
     "StateSpace",

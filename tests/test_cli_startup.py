@@ -47,6 +47,7 @@ def _imported(*argv: str) -> set[str]:
         ("estimate", "--help"),
         ("tf", "--help"),
         ("draw", "--help"),
+        ("identifiability", "--help"),
     ],
 )
 def test_the_parser_imports_no_heavy_library(argv):

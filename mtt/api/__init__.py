@@ -5,10 +5,12 @@ See docs/api.md. Everything here is also `mtt.NAME`.
 
 from mtt.api.model import Model, example, load
 from mtt.api.results import Causality, StateSpace, Theta, TransferFunction
+from mtt.derivation.identifiability import Identifiability
 from mtt.language.diagnostics import MttError
 
 __all__ = [
     "Causality",
+    "Identifiability",
     "Model",
     "MttError",
     "StateSpace",

@@ -14,6 +14,7 @@ from mtt.derivation import pipeline
 from mtt.derivation import theta as derived
 from mtt.derivation.causality import assign
 from mtt.derivation.equations import Equations
+from mtt.derivation.identifiability import Identifiability, identifiability
 from mtt.derivation.parameters import ParameterChoice, parametrise
 from mtt.derivation.transfer import transfer_function
 from mtt.estimator import codegen
@@ -211,6 +212,21 @@ class Model:
                 file=self.source.name,
             )
         return self._theta
+
+    def identifiability(self) -> Identifiability:
+        """Whether input/output data determine the unknowns, decided exactly for generic
+        true values (docs/identifiability.md; `mtt identifiability`): `verdict` "global",
+        "local" (`solutions` values give each transfer function) or "none" (`combinations`
+        of the unknowns are all the data determine).
+
+        >>> import mtt
+        >>> mtt.load(mtt.example("rlc3")).identifiability()
+        Identifiability('global', unknowns=('r', 'l', 'c'))
+        >>> found = mtt.load(mtt.example("dc_motor"), unknowns="jm,jl").identifiability()
+        >>> found.verdict, found.combinations
+        ('none', (jl + jm,))
+        """
+        return identifiability(self._checked_theta())
 
     def to_scipy(self, k: object = None, **known: object):
         """scipy.signal.TransferFunction at unknown = k (default: the file's value); the

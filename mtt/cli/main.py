@@ -15,7 +15,7 @@ import traceback
 from typing import TYPE_CHECKING
 
 from mtt import __version__
-from mtt.cli import experiment_args, views
+from mtt.cli import experiment_args, identify, views
 from mtt.cli.options import (
     add_parameter_options,
     add_selection_options,
@@ -78,34 +78,40 @@ def _summary(
     return record
 
 
-def _check_one(file: str, args) -> tuple[dict, ModelError | None, BondGraph | None]:
+def _check_one(file: str, args) -> tuple[dict, ModelError | None, BondGraph | None, list]:
     """Everything that can be told of a model before algebra: the language's rules, then
-    causality and the structure (can the input reach the output, the unknowns matter)."""
+    causality and the structure (can the input reach the output, the unknowns matter);
+    with --identifiability, whether the data can determine the unknowns (a warning)."""
     from mtt.derivation.structure import causal_for
     from mtt.language.bondgraph import build
     from mtt.language.parse import parse
     from mtt.language.subsystems import read_source
 
     parsed = graph = problem = None
+    notes = []
     try:
         parsed = parse(read_source(file))
         graph = build(parsed, selection_from_args(args))
         causal_for(graph, identify=True)
+        if args.identifiability:  # algebra: sympy and the transfer function
+            notes = identify.warnings(graph, choice_from_args(args))
     except ModelError as exc:
         problem = exc
-    return _summary(file, parsed, graph, problem), problem, graph
+    record = _summary(file, parsed, graph, problem)
+    record["warnings"] += [note.to_json() for note in notes]
+    return record, problem, graph, notes
 
 
 def cmd_check(args) -> int:
     status = EXIT_OK
     for file in args.files:
-        record, problem, graph = _check_one(file, args)
+        record, problem, graph, notes = _check_one(file, args)
         if problem is not None:
             status = EXIT_MODEL_ERROR
         if args.json:
             _print_json(record)
             continue
-        for note in graph.warnings if graph else ():
+        for note in (*(graph.warnings if graph else ()), *notes):
             print(note.render(), file=sys.stderr)
         if problem is not None:
             print(problem.render(), file=sys.stderr)
@@ -292,6 +298,12 @@ def make_parser() -> argparse.ArgumentParser:
     )
     check.add_argument("files", nargs="+", metavar="FILE")
     check.add_argument("--json", action="store_true", help="print one JSON object per file")
+    check.add_argument(
+        "--identifiability",
+        action="store_true",
+        help="also derive the transfer function and warn (not_identifiable) when the data "
+        "could not determine the unknowns (slower: computer algebra)",
+    )
     add_selection_options(check)
     check.set_defaults(run=cmd_check)
 
@@ -331,6 +343,9 @@ def make_parser() -> argparse.ArgumentParser:
         command.set_defaults(run=run)
 
     experiment_args.register(commands)
+    compile_ = commands.choices["compile"]
+    compile_.set_defaults(run=identify.warn_on_compile(compile_.get_default("run")))
+    identify.register(commands)
     views.register(commands)
     return parser
 

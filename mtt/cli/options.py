@@ -105,9 +105,9 @@ def choice_from_args(args: argparse.Namespace) -> ParameterChoice:
 
     return ParameterChoice(
         unknowns=_unknowns(args),
-        keep=frozenset(args.keep),
-        symbolic=args.symbolic,
-        overrides=MappingProxyType(dict(args.overrides)),
+        keep=frozenset(getattr(args, "keep", ())),  # commands with selection options only
+        symbolic=getattr(args, "symbolic", False),
+        overrides=MappingProxyType(dict(getattr(args, "overrides", ()))),
         input=args.input,
         output=args.output,
     )
