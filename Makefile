@@ -28,7 +28,7 @@ format: $(STAMP)
 	$(BIN)/ruff format .
 
 check: $(STAMP)
-	$(MTT) check $(MODELS)
+	$(MTT) check --identifiability $(MODELS)
 
 demo: $(STAMP)
 	$(MTT) check $(MODELS)
