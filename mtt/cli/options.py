@@ -111,3 +111,84 @@ def choice_from_args(args: argparse.Namespace) -> ParameterChoice:
         input=args.input,
         output=args.output,
     )
+
+
+# Values per unknown, for the commands that simulate and estimate several unknowns:
+# --k0 a=1,b=2 (a starting point; repeat the option's values for several), --true
+# a=10,b=1, --bounds a=0:5,b=1:20. With one unknown a bare value stays valid (--k0 5,
+# --bounds 0:5). The parser checks the form; `in_unknowns_order` checks the names against
+# the model's unknowns once it is known.
+
+Named = dict[str, float] | float  # by name, or a bare value (a model with one unknown)
+NamedBounds = dict[str, tuple[float, float]] | tuple[float, float]
+
+
+def _finite(text: str, whole: str) -> float:
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text.strip()!r} in {whole!r} is not a number") from None
+    if value != value or value in (float("inf"), float("-inf")):
+        raise argparse.ArgumentTypeError(f"{text.strip()!r} in {whole!r} is not finite")
+    return value
+
+
+def _interval(text: str, whole: str) -> tuple[float, float]:
+    low, colon, high = text.partition(":")
+    if not colon:
+        raise argparse.ArgumentTypeError(f"expected LO:HI, not {text.strip()!r} in {whole!r}")
+    low, high = _finite(low, whole), _finite(high, whole)
+    if not low < high:
+        raise argparse.ArgumentTypeError(f"{text.strip()!r} in {whole!r}: LO must be below HI")
+    return low, high
+
+
+def _by_name(text: str, value) -> dict:
+    """`a=X,b=Y` -> {"a": value(X), "b": value(Y)}, each name once."""
+    found = {}
+    for part in text.split(","):
+        name, equals, rest = part.partition("=")
+        name = name.strip()
+        if not equals or not _is_name(name):
+            raise argparse.ArgumentTypeError(f"expected NAME=VALUE,..., not {text!r}")
+        if name in found:
+            raise argparse.ArgumentTypeError(f"{name} is given twice in {text!r}")
+        found[name] = value(rest, text)
+    return found
+
+
+def named_values(text: str) -> Named:
+    """The type of --k0 and --true: `a=1,b=2`, or a bare `5` for one unknown."""
+    return _by_name(text, _finite) if "=" in text else _finite(text, text)
+
+
+def named_bounds(text: str) -> NamedBounds:
+    """The type of --bounds: `a=0:5,b=1:20`, or a bare `0:5` for one unknown."""
+    return _by_name(text, _interval) if "=" in text else _interval(text, text)
+
+
+def in_unknowns_order(given, unknowns: tuple[str, ...], option: str, complete: bool = True):
+    """The values of `option` as a tuple in the order of `unknowns` (None for one not given
+    when not `complete`); raise `MttError` (bad_value) for a bare value with several
+    unknowns, a name that is not an unknown, or (`complete`) an unknown left out."""
+    from mtt.language.diagnostics import MttError
+
+    if not isinstance(given, dict):
+        if len(unknowns) != 1:
+            raise MttError(
+                f"{option}: the model has {len(unknowns)} unknowns ({', '.join(unknowns)}): "
+                f"give each by name, {option} {','.join(f'{n}=...' for n in unknowns)}",
+                kind="bad_value",
+            )
+        return (given,)
+    strangers = [name for name in given if name not in unknowns]
+    if strangers:
+        raise MttError(
+            f"{option}: {', '.join(strangers)} {'is' if len(strangers) == 1 else 'are'} not "
+            f"an unknown of the model (its unknowns: {', '.join(unknowns)})",
+            kind="bad_value",
+        )
+    missing = [name for name in unknowns if name not in given]
+    if complete and missing:
+        raise MttError(f"{option}: no value for {', '.join(missing)}", kind="bad_value")
+    return tuple(given.get(name) for name in unknowns)

@@ -1,0 +1,65 @@
+"""The option types for several unknowns (--k0 a=1,b=2, --true, --bounds a=LO:HI), as
+the simulating and estimating commands declare them, and their check against a model's
+unknowns."""
+
+from __future__ import annotations
+
+import argparse
+
+import pytest
+
+from mtt.cli.options import in_unknowns_order, named_bounds, named_values
+from mtt.language.diagnostics import MttError
+
+
+def parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(prog="mtt estimate", exit_on_error=False)
+    parser.add_argument("--k0", type=named_values, nargs="+")
+    parser.add_argument("--true", type=named_values)
+    parser.add_argument("--bounds", type=named_bounds)
+    return parser
+
+
+def test_values_by_name_and_bare():
+    args = parser().parse_args(["--k0", "ra=1,jl=2.5", "jl=1e-3,ra=-4", "--true", "ra=1, jl=10",
+                                "--bounds", "ra=0:5,jl=1:20"])  # fmt: skip
+    assert args.k0 == [{"ra": 1.0, "jl": 2.5}, {"jl": 0.001, "ra": -4.0}]
+    assert args.true == {"ra": 1.0, "jl": 10.0}
+    assert args.bounds == {"ra": (0.0, 5.0), "jl": (1.0, 20.0)}
+    assert in_unknowns_order(args.k0[1], ("ra", "jl"), "--k0") == (-4.0, 0.001)
+    assert in_unknowns_order(args.bounds, ("ra", "jl"), "--bounds") == ((0.0, 5.0), (1.0, 20.0))
+    # a bare negative bound must be attached: argparse reads "-1:1" as an option
+    one = parser().parse_args(["--k0", "0", "5", "--true", "10", "--bounds=-1:1", "--k0", "2"])
+    assert (one.k0, one.true, one.bounds) == ([2.0], 10.0, (-1.0, 1.0))
+    assert in_unknowns_order(one.true, ("k",), "--true") == (10.0,)
+    assert in_unknowns_order(named_values("motor.ra=3"), ("motor.ra",), "--true") == (3.0,)
+
+
+@pytest.mark.parametrize(
+    ("argv", "message"),
+    [
+        (["--k0", "ra=1,ra=2"], "ra is given twice"),
+        (["--k0", "ra=x"], "'x' in 'ra=x' is not a number"),
+        (["--true", "ra=nan"], "'nan' in 'ra=nan' is not finite"),
+        (["--true", "1=2"], "expected NAME=VALUE"),
+        (["--true", "ra=1,"], "expected NAME=VALUE"),
+        (["--bounds", "ra=5:1"], "LO must be below HI"),
+        (["--bounds", "ra=5"], "expected LO:HI"),
+        (["--bounds", "0:inf"], "not finite"),
+    ],
+)
+def test_malformed_values_are_refused_by_the_parser(argv, message):
+    with pytest.raises(argparse.ArgumentError, match=message):
+        parser().parse_args(argv)
+
+
+def test_values_are_checked_against_the_unknowns():
+    with pytest.raises(MttError, match="2 unknowns .ra, jl.: give each by name, --k0 ra=...,jl="):
+        in_unknowns_order(5.0, ("ra", "jl"), "--k0")
+    with pytest.raises(MttError, match="--true: k is not an unknown of the model"):
+        in_unknowns_order({"ra": 1.0, "k": 2.0}, ("ra", "jl"), "--true")
+    with pytest.raises(MttError, match="--true: no value for jl") as raised:
+        in_unknowns_order({"ra": 1.0}, ("ra", "jl"), "--true")
+    assert raised.value.kind == "bad_value"
+    partial = in_unknowns_order({"jl": (0.0, 1.0)}, ("ra", "jl"), "--bounds", complete=False)
+    assert partial == (None, (0.0, 1.0))
