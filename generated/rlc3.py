@@ -28,8 +28,14 @@ How to use it
     t = np.linspace(0.0, 10.0, 1001)
     u = np.ones_like(t)                                # a unit step
     y = rlc3.simulate(t, u, k=0.1)
+    # the paper's estimate from k0, the global minimiser of the cost J, its local minima:
     result = rlc3.estimate(t, u, y, k0=0.05)
-    result.k, result.minima()                          # final estimate, local minima of J
+    result.k, result.global_k[-1], result.minima()
+    # least squares over the whole record, globally:
+    rlc3.fit(t, u, y).k
+    # a live stream, one sample (or chunk) at a time:
+    tracker = rlc3.Tracker(k0=0.05)
+    tracker.update(t[0], u[0], y[0])
 
 or, from data in a CSV file with columns t, u, y:
 
@@ -39,8 +45,13 @@ API (the unknown is always called k here)
     theta(**known)                  Theta: rows a0..an, -b0..-bm; column j holds k^j terms
     transfer_function(k, **known)   (num, den), highest power of s first (scipy.signal)
     simulate(t, u, k, *, hold="linear", **known) -> y, exact for the stated hold
-    estimate(t, u, y, *, k0, beta=0.1, S0=1e-4, C=None, hold="linear", method="RK23",
-             rtol=1e-6, atol=1e-9, max_step=inf, progress=None, **known) -> Estimate
+    estimate(t, u, y, *, k0, beta=0.1, S0=1e-4, C=None, hold="linear", engine="moments",
+             bounds=None, method="RK23", rtol=1e-6, atol=1e-9, max_step=inf,
+             progress=None, **known) -> Estimate: k^ at every sample (and global_k)
+    fit(t, u, y, *, C=None, beta=0.0, bounds=None, hold="linear", **known) -> Fit
+    Tracker(*, k0, beta=0.1, S0=1e-4, C=None, hold="linear", bounds=None, **known)
+                                    .update(t, u, y) -> k^; .k, .global_k, .t
+    filter_states(t, w, *, C=None, hold="linear")  s^i w / C(s) at the sample times
     filter_polynomial(C)            the filter C(s) that `estimate` uses for a given C
     read_csv(path, columns)         named columns of a CSV file, as float arrays
 
@@ -182,6 +193,17 @@ def _signals(*named: tuple[str, object], minimum: int, after: float = -math.inf)
 
     `after` is the time of a sample already seen (a Tracker's last): t must follow it.
     """
+    if minimum <= 1 and all(isinstance(value, int | float) for _, value in named):
+        arrays = [np.array([float(value)]) for _, value in named]  # one sample, quickly
+        for (name, _), array in zip(named, arrays, strict=True):
+            if not math.isfinite(array[0]):
+                raise ValueError(f"{name}[0] is {array[0]}: every value must be finite")
+        if not arrays[0][0] > after:
+            raise ValueError(
+                f"t must be strictly increasing: t[0] = {arrays[0][0]} follows the last "
+                f"sample's t = {after}"
+            )
+        return arrays
     arrays = [_array(name, value) for name, value in named]
     lengths = [array.size for array in arrays]
     if len(set(lengths)) > 1:
@@ -426,13 +448,15 @@ def _propagate(Phi, Gamma, ends, z0, index=None, out=None) -> np.ndarray:
 
     k = index_i (None: 0); Phi (k, s, s), Gamma (k, batch, e, s), ends (batch, n, e), z0
     (batch, s); the states (batch, n + 1, s), from z_0 = z0, are written into `out` if
-    given. By blocks of L intervals: the responses of all blocks from rest advance together
-    (one matrix product per position in a block), the block starts follow one another (the
-    same recursion with the blocks' transition matrices, done the same way), and each
-    block's free response from its start is added. Python loops run over about
-    3 L log(n) / log(L) steps, each a small product over all blocks. The arithmetic is the
-    plain recursion's, exact for every step: no transfer function in z, whose coefficients
-    lose all accuracy when the filter's poles crowd near z = 1 at fine sampling.
+    given. By blocks of L intervals: each block's end state from rest is one convolution
+    (a product with the stacked Phi^j Gamma), the block starts follow one another (the same
+    recursion with the blocks' transition Phi^L, done the same way), then all blocks advance
+    together from their starts, one matrix product per position in a block. (Steps that
+    differ from one interval to the next: from rest, the starts, then again from them.)
+    Python loops run over about 2 L log(n) / log(L) steps, each a small product over all
+    blocks. The arithmetic is the plain recursion's, exact for every step: no transfer
+    function in z, whose coefficients lose all accuracy when the filter's poles crowd near
+    z = 1 at fine sampling.
     """
     batch, count = ends.shape[:2]
     size = Phi.shape[-1]
@@ -440,28 +464,30 @@ def _propagate(Phi, Gamma, ends, z0, index=None, out=None) -> np.ndarray:
     out = np.empty((batch, count + 1, size)) if out is None else out
     out[:, 0] = z0
     transposed = np.swapaxes(Phi, -1, -2)
-    length = max(4, min(32, math.isqrt(count)))
+    length = max(4, min(32, round(count ** (1 / 3))))
     blocks = count // length if count > 2 * length else 0
     done = blocks * length
     if blocks:
-        O = out[:, :done].reshape(batch, blocks, length, size)  # from rest, then from starts
+        O = out[:, :done].reshape(batch, blocks, length, size)
         E = ends[:, :done].reshape(batch, blocks, length, -1)
-        O[:, :, 0] = 0.0
         if index is None:
-            for j in range(length - 1):
-                np.matmul(O[:, :, j], transposed[0], out=O[:, :, j + 1])
-                O[:, :, j + 1] += E[:, :, j] @ Gamma[0]
-            last = O[:, :, -1] @ transposed[0] + E[:, :, -1] @ Gamma[0]
             powers = np.empty((length + 1, size, size))
             powers[0] = np.eye(size)
             for j in range(length):
                 np.matmul(Phi[0], powers[j], out=powers[j + 1])
+            # each block's end from rest, sum_j Phi^(L-1-j) Gamma^T e_j: one product a batch
+            kernel = Gamma[0][None] @ np.swapaxes(powers[length - 1 :: -1], 1, 2)[:, None]
+            inputs = np.ascontiguousarray(E).reshape(batch, blocks, -1)
+            last = inputs @ np.swapaxes(kernel, 0, 1).reshape(batch, -1, size)
             identity = np.broadcast_to(np.eye(size), (1, batch, size, size))
             starts = _propagate(powers[length:], identity, last, z0)
-            for j in range(length):
-                O[:, :, j] += starts[:, :blocks] @ powers[j].T
+            O[:, :, 0] = starts[:, :blocks]
+            for j in range(length - 1):  # then every block from its start, all at once
+                np.matmul(O[:, :, j], transposed[0], out=O[:, :, j + 1])
+                O[:, :, j + 1] += E[:, :, j] @ Gamma[0]
         else:
             where = index[:done].reshape(blocks, length)
+            O[:, :, 0] = 0.0  # from rest first
 
             def advance() -> np.ndarray:
                 for j in range(length):
@@ -494,8 +520,10 @@ def _propagate(Phi, Gamma, ends, z0, index=None, out=None) -> np.ndarray:
 # of Taylor coefficients about a centre (row[i] = J^(i)(centre) / i!); most functions take
 # a stack of rows, one per sample, and work on all of them at once.
 
+EPS = float(np.finfo(float).eps)
 NOISE = 10.0  # rounding noise: within NOISE (1 + memory / step) eps of the terms it sums
-ROUNDING = 16 * np.finfo(float).eps
+ROUNDING = 16 * EPS
+SETTLED = 0.1 * math.sqrt(EPS)  # a Newton step this small (relative) leaves rounding
 
 
 def _cost_forms(Theta: np.ndarray) -> np.ndarray:
@@ -512,70 +540,79 @@ def _cost_forms(Theta: np.ndarray) -> np.ndarray:
     return forms
 
 
-def _taylor(P: np.ndarray, k) -> np.ndarray:
+def _columns(P) -> list:
+    """P's coefficients, lowest power first: arrays over samples (P an array of rows), or
+    floats (P a sequence of numbers: one polynomial, as a Tracker's one-sample update has)."""
+    return [P[..., i] for i in range(P.shape[-1])] if isinstance(P, np.ndarray) else list(P)
+
+
+def _taylor(P, k):
     """Taylor coefficients about k of each row of P (ascending powers): row[i] = P^(i)(k)/i!."""
-    a = np.array(P, dtype=float)
-    k = np.asarray(k, dtype=float)
-    degree = a.shape[-1] - 1
+    a = _columns(P)
+    degree = len(a) - 1
     for low in range(degree):  # repeated synthetic division by (x - k)
         for i in range(degree - 1, low - 1, -1):
-            a[..., i] += k * a[..., i + 1]
-    return a
+            a[i] = a[i] + k * a[i + 1]
+    return np.stack(a, -1) if isinstance(P, np.ndarray) else a
 
 
-def _value(P: np.ndarray, k) -> np.ndarray:
+def _value(P, k):
     """Each row polynomial (ascending) at its k (Horner)."""
-    value = np.zeros(np.broadcast_shapes(P.shape[:-1], np.shape(k)))
-    for p in range(P.shape[-1] - 1, -1, -1):
-        value = value * k + P[..., p]
+    value = 0.0
+    for coefficient in reversed(_columns(P)):
+        value = value * k + coefficient
     return value
 
 
-def _slopes(P: np.ndarray, k) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """J_1 and J_2 of each row at its k, and the size of the terms J_1 sums (its rounding)."""
-    degree = P.shape[-1] - 1
+def _slopes(P, k, sizes=None):
+    """J_1 and J_2 of each row at its k, and the size of the terms J_1 sums (its rounding);
+    `sizes` are P's coefficients' magnitudes, when the caller has them."""
+    a, distance = _columns(P), abs(k)
+    sizes = [abs(value) for value in a] if sizes is None else sizes
     first = second = size = 0.0
-    for p in range(degree, 0, -1):
-        first = first * k + p * P[..., p]
-        size = size * np.abs(k) + p * np.abs(P[..., p])
+    for p in range(len(a) - 1, 0, -1):
+        first = first * k + p * a[p]
+        size = size * distance + p * sizes[p]
         if p >= 2:
-            second = second * k + p * (p - 1) * P[..., p]
+            second = second * k + p * (p - 1) * a[p]
     return first, second, size
 
 
-def _curvature_floor(A: np.ndarray, reach) -> np.ndarray:
+def _curvature_floor(A, reach):
     """A lower bound of J_2 on the interval within `reach` of the centre of the Taylor rows A.
 
     J_2(centre + d) = sum_(i >= 2) i (i - 1) A_i d^(i-2): the terms beyond the first can
     lower it by at most sum_(i >= 3) i (i - 1) |A_i| reach^(i-2).
     """
-    floor = 2.0 * A[..., 2]
-    power = np.ones_like(floor)
-    for i in range(3, A.shape[-1]):
+    a = _columns(A)
+    floor, power = 2.0 * a[2], 1.0
+    for i in range(3, len(a)):
         power = power * reach
-        floor = floor - i * (i - 1) * np.abs(A[..., i]) * power
+        floor = floor - i * (i - 1) * abs(a[i]) * power
     return floor
 
 
 def _newton(P: np.ndarray, k, iterations: int = 12) -> tuple[np.ndarray, np.ndarray]:
     """Stationary points of each row near k by Newton's method: (points, converged).
 
-    Converged means J_1 is within rounding of the terms it sums and J_2 > 0 there (a local
-    minimum); one more step polishes it. Rows that do not converge are left as they are.
+    Converged means J_1 is within rounding of the terms it sums where J_2 > 0 (near a local
+    minimum), or the step was below sqrt(eps) relative (Newton's error is then about its
+    square: below rounding); the step is taken either way. Rows that do not converge are
+    left as they are.
     """
     k = np.array(np.broadcast_to(k, P.shape[:-1]), dtype=float)
     done = np.zeros(k.shape, dtype=bool)
+    sizes = [abs(value) for value in _columns(P)]
     for _ in range(iterations):
-        first, second, size = _slopes(P, k)
+        first, second, size = _slopes(P, k, sizes)
         ok = second > 0
         step = np.where(ok, -first / np.where(ok, second, 1.0), 0.0)
-        settled = ok & (np.abs(first) <= ROUNDING * size)
+        settled = ok & ((np.abs(first) <= ROUNDING * size) | (np.abs(step) <= SETTLED * np.abs(k)))
         k = np.where(done, k, k + step)
         done |= settled
         if done.all():
             break
-    first, second, size = _slopes(P, k)
-    return k, done & (second > 0) & np.isfinite(k)
+    return k, done & np.isfinite(k)
 
 
 def _companion_roots(D: np.ndarray) -> np.ndarray:
@@ -685,14 +722,22 @@ class _Setup:
     hold: str
     forms: np.ndarray  # the cost's quadratic forms in X, one per power of k
     memory: float  # the filter's slowest time constant
-    state_scale: np.ndarray  # s^i w/C is about state_scale[i] times w/C
+    phi_map: np.ndarray  # phi = [z_y, z_u] @ phi_map (X is the first n+1 and m+1 states)
+    floor_map: np.ndarray  # the rounding of phi is about eps |[z_y, z_u]| @ floor_map
 
     @staticmethod
     def of(Theta: np.ndarray, c: np.ndarray, beta: float, hold: str) -> "_Setup":
         A, B = _realisation(c)
         order = c.size - 1
-        scale = (c[-1] / c[0]) ** (np.arange(order) / order)
-        return _Setup(Theta, A, B, beta, hold, _cost_forms(Theta), _memory(c), scale)
+        phi_map = np.zeros((2 * order, N + 1))
+        phi_map[: n + 1], phi_map[order : order + m + 1] = Theta[: n + 1], Theta[n + 1 :]
+        # a state's rounding is about eps times the size of its filter's whole state, each
+        # entry scaled to w/C (s^i w/C is about rate^i w/C): within a factor order, this sum
+        scale = np.tile((c[-1] / c[0]) ** (np.arange(order) / order), 2)
+        reach = (np.abs(phi_map) * scale[:, None]).reshape(2, order, -1).sum(1)
+        floor_map = np.repeat(reach, order, axis=0) / scale[:, None]
+        forms = _cost_forms(Theta)
+        return _Setup(Theta, A, B, beta, hold, forms, _memory(c), phi_map, floor_map)
 
     def maps(self, steps: np.ndarray):
         """Phi, Gamma (both filters, as one block-diagonal system) and the cost forms W."""
@@ -704,24 +749,22 @@ class _Setup:
                               self.forms, span=span)  # fmt: skip
         return maps[2][0]
 
-    def quiet(self, flat: np.ndarray, steps) -> np.ndarray:
-        """Whether each interval is rounding noise (see above), from the filter states
-        [z_y, z_u] at every sample and the steps (one, or one per interval).
+    def noise(self, flat: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """|phi| (the coefficients of the error g in k) at each sample, from the filter
+        states [z_y, z_u], and the size of the terms it sums, whose rounding it is below."""
+        return np.abs(flat @ self.phi_map), np.abs(flat) @ self.floor_map
 
-        A filter state's rounding is about eps times the size of the whole state (each
-        entry scaled to w/C), which bounds |z| @ (1 / state_scale) within a factor order.
-        """
-        order = self.A.shape[0]
-        Theta = np.zeros((2 * order, N + 1))  # phi = z @ Theta: X is the first n+1, m+1
-        Theta[: n + 1], Theta[order : order + m + 1] = self.Theta[: n + 1], self.Theta[n + 1 :]
-        scale = np.r_[self.state_scale, self.state_scale]
-        reach = (np.abs(Theta) * scale[:, None]).reshape(2, order, -1).sum(1)
-        reach = np.repeat(reach, order, axis=0) / scale[:, None]  # floor = |z| @ reach
-        phi = np.abs(flat @ Theta)
-        floor = np.abs(flat) @ reach
-        limit = NOISE * np.finfo(float).eps * (1.0 + self.memory / np.asarray(steps))
-        limit = limit[:, None] if np.ndim(limit) else limit
-        return ((phi[:-1] <= limit * floor[:-1]) & (phi[1:] <= limit * floor[1:])).all(1)
+    def quiet(self, noise: tuple, steps) -> np.ndarray:
+        """Whether each interval is rounding noise: `noise` at every sample, and the steps
+        (one, or one per interval). See above for the threshold."""
+        phi, floor = noise
+        limit = self.limit(np.asarray(steps))
+        limit = limit[..., None] if np.ndim(limit) else limit
+        return ((phi[:-1] <= limit * floor[:-1]) & (phi[1:] <= limit * floor[1:])).all(-1)
+
+    def limit(self, steps):
+        """The noise threshold for intervals of these steps, relative to eps times floor."""
+        return NOISE * EPS * (1.0 + self.memory / steps)
 
 
 def _moments_input(z0: np.ndarray, y: np.ndarray, u: np.ndarray, maps, index) -> np.ndarray:
@@ -774,13 +817,17 @@ class _Run:
         self.P[:3] = [k0 * k0, -2.0 * k0, 1.0]  # the prior S0 (k - k0)^2 / 2
         self.log_scale = math.log(0.5 * S0)
         self.khat = k0
-        self.taylor = _taylor(self.P, k0)  # of J about k^, scaled as P
+        self.taylor = np.array(_taylor(self.P.tolist(), k0))  # of J about k^, scaled as P
         self.ok, self.stopped_at = True, None
         self.informed = -math.inf  # the time of the last informative sample
+        self.noise = None  # the last sample's (|phi|, floor), see _Setup.noise
         self.cache: dict[float, tuple] = {}
+        self.step = None  # the last piece's step and maps, when it had one step
 
     def _maps(self, steps: np.ndarray, resolution: float):
         """Phi, Gamma and W for each step, made once per distinct step and kept."""
+        if steps.size == 1 and self.step and abs(steps[0] - self.step[0]) <= resolution:
+            return self.step[2]  # the same step as last time (a regular record)
         found = []
         for h in steps.tolist():
             key = next((key for key in self.cache if abs(key - h) <= resolution), None)
@@ -790,15 +837,70 @@ class _Run:
                 key = h
                 self.cache[key] = tuple(part[0] for part in self.setup.maps(np.array([h])))
             found.append(self.cache[key])
-        return tuple(np.stack(parts) for parts in zip(*found, strict=True))
+        maps = tuple(np.stack(parts) for parts in zip(*found, strict=True))
+        self.step = (steps[0], found[0], maps) if len(found) == 1 else None
+        return maps
+
+    def _one(self, t: float, u: float, y: float) -> bool:
+        """One sample after the last, in the common case: the same arithmetic as `_piece`,
+        in floats where numpy's cost per call would dominate. False, having changed
+        nothing, where `_piece` is needed (a new step, an interval to cross in sub-steps,
+        a fold, a stopped run, a scale beyond floats)."""
+        setup, step = self.setup, self.step
+        h = t - self.t
+        if not (self.ok and step and abs(h - step[0]) <= TIME_RESOLUTION * abs(t)):
+            return False
+        Phi, Gamma, W = step[1]
+        order = Phi.shape[-1]
+        ends = np.array([[self.y, y], [self.u, u]])
+        following = self.z.reshape(2, order) @ Phi.T + (ends[:, None] @ Gamma)[:, 0]
+        v = np.concatenate([self.z, ends.ravel()])
+        noise = setup.noise(following.reshape(1, -1))
+        limit = setup.limit(step[0])
+        last = self.noise
+        quiet = bool((noise[0] <= limit * noise[1]).all() and (last[0] <= limit * last[1]).all())
+        growth = setup.beta * h - self.log_scale  # J = exp(log_scale) P, then decays by e^(-beta h)
+        if growth > 700.0:
+            return False
+        q = [0.0] * len(self.P) if quiet else ((W @ v) @ v).tolist()
+        q[0], q[-1] = max(q[0], 0.0), max(q[-1], 0.0)
+        factor = math.exp(growth)
+        P = [p + factor * value for p, value in zip(self.P.tolist(), q, strict=True)]
+        k = self.khat
+        if not quiet:  # Newton from k^, accepted as in _follow
+            for _ in range(12):
+                first, second, size = _slopes(P, k)
+                if not second > 0:
+                    return False
+                step = -first / second
+                settled = abs(first) <= ROUNDING * size or abs(step) <= SETTLED * abs(k)
+                k += step
+                if settled:
+                    break
+            else:
+                return False
+            reach, own = abs(k - self.khat), _taylor(P, k)
+            if not (own[2] > 0 and _curvature_floor(own, reach) > 0
+                    and _curvature_floor(self.taylor, reach) > 0):  # fmt: skip
+                return False
+            self.informed = t
+        scale = max(abs(value) for value in P)
+        P = [value / scale for value in P]
+        self.P, self.log_scale = np.array(P), self.log_scale + math.log(scale) - setup.beta * h
+        self.z, self.t, self.u, self.y, self.noise = following.ravel(), t, u, y, noise
+        self.khat, self.taylor = k, np.array(_taylor(P, k))
+        return True
 
     def advance(self, t: np.ndarray, u: np.ndarray, y: np.ndarray, record: bool = False):
         """Take checked samples that follow the last. With record, return for each sample
         reached (all of them unless the run stops) t, k^, the Taylor rows of J about k^
         and their log scale (J's i-th derivative is i! row[i] exp(scale))."""
+        if not record and t.size == 1 and self._one(t.item(), u.item(), y.item()):
+            return None
         pieces = []
         if self.t == -math.inf and t.size:
             self.t, self.u, self.y, self.informed = t[0], u[0], y[0], t[0]
+            self.noise = self.setup.noise(self.z[None])
             if record:
                 pieces.append((t[:1], np.array([self.khat]), self.taylor[None],
                                np.array([self.log_scale])))  # fmt: skip
@@ -826,15 +928,18 @@ class _Run:
         rows = _moments_input(self.z, ys, us, maps, steps.index)
         width = self.z.size
         q = _interval_costs(rows[:-1], maps[2], steps.index)
-        quiet = setup.quiet(rows[:, :width], steps.values if steps.index is None else steps.at(steps.values))
-        q[quiet] = 0.0
+        noise = setup.noise(rows[:, :width])
+        quiet = setup.quiet(noise, steps.values if steps.index is None else steps.at(steps.values))
+        self.noise = (noise[0][-1:], noise[1][-1:])
+        if quiet.any():
+            q[quiet] = 0.0
         if not quiet.all():
             self.informed = times[1 + np.flatnonzero(~quiet)[-1]]
         # the discounted sums, all scaled by exp(-top) so that nothing overflows
         offset = times[1:] - times[0]
-        with np.errstate(divide="ignore"):
-            size = np.log(np.abs(q).max(1))
-        top = max(self.log_scale, float(np.max(setup.beta * offset + size)))
+        largest = float(np.abs(q).max())
+        top = self.log_scale if largest == 0 else max(self.log_scale, math.log(largest))
+        top += setup.beta * offset[-1]
         start = self.P * math.exp(self.log_scale - top)
         E = np.cumsum(q * np.exp(setup.beta * offset - top)[:, None], 0) + start
         log_scale = top - setup.beta * offset
@@ -857,7 +962,7 @@ class _Run:
         self.P, self.log_scale = E[-1] / scale, log_scale[-1] + math.log(scale)
         if khat.size:
             self.khat = khat[-1]
-        self.taylor = _taylor(self.P, self.khat)
+        self.taylor = np.array(_taylor(self.P.tolist(), self.khat))
         return t[: khat.size], khat, taylor, log_scale[: khat.size]
 
     def _follow(self, E: np.ndarray, times: np.ndarray, quiet: np.ndarray, partial):
@@ -876,10 +981,10 @@ class _Run:
                 converged = (last < 0) | converged[last]
             previous = np.concatenate([[k], candidate[:-1]])
             reach = np.abs(candidate - previous)
-            own = _taylor(E[i:j], candidate)
-            back = np.concatenate([before[None], own[:-1]])
-            good = converged & (_curvature_floor(_taylor(E[i:j], previous), reach) > 0)
-            good &= _curvature_floor(back, reach) > 0
+            own = _taylor(E[i:j], candidate)  # J about each new point
+            back = np.concatenate([before[None], own[:-1]])  # J before, about the old point
+            good = converged & (own[:, 2] > 0)  # a minimum: J_2 > 0 there
+            good &= (_curvature_floor(own, reach) > 0) & (_curvature_floor(back, reach) > 0)
             run = j - i if good.all() else int(np.argmin(good))
             if run:
                 khat[i : i + run], taylor[i : i + run] = candidate[:run], own[:run]
@@ -903,13 +1008,14 @@ class _Run:
             target = min(h, done + step)
             P = partial(l, target)
             r, converged = _newton(P[None], k)
-            reach = abs(r[0] - k)
+            reach, own = abs(r[0] - k), _taylor(P, r[0])
             if (
                 converged[0]
-                and _curvature_floor(_taylor(P, k), reach) > 0
+                and own[2] > 0
+                and _curvature_floor(own, reach) > 0
                 and _curvature_floor(before, reach) > 0
             ):
-                done, k, before = target, float(r[0]), _taylor(P, r[0])
+                done, k, before = target, float(r[0]), own
                 if done >= h:
                     return k
                 step *= 2.0
@@ -1097,8 +1203,8 @@ def estimate(
             )
     return Estimate(
         t=times, khat=khat, global_k=best, ok=stop is None, message=message,
-        stopped_at=None if stop is None else float(stop[0]), informed_until=informed, bounds=bounds, _shape=shape,
-        _log_J2=log_J2,
+        stopped_at=None if stop is None else float(stop[0]), informed_until=informed,
+        bounds=bounds, _shape=shape, _log_J2=log_J2,
     )  # fmt: skip
 
 
@@ -1278,7 +1384,8 @@ def fit(t, u, y, *, C=None, beta: float = 0.0, bounds=None, hold: str = "linear"
             maps = setup.maps(steps.values[which])
         rows = _moments_input(z, y[lo:hi], u[lo:hi], maps, index)
         z = rows[-1, : z.size]
-        quiet = setup.quiet(rows[:, : z.size], steps.values if index is None else np.diff(t[lo:hi]))
+        noise = setup.noise(rows[:, : z.size])
+        quiet = setup.quiet(noise, steps.values if index is None else np.diff(t[lo:hi]))
         V = rows[:-1]
         if beta == 0 and not quiet.any():
             weight = None
@@ -1439,7 +1546,8 @@ def main(argv: list[str] | None = None) -> int:
         known = dict(_assignment(text) for text in args.set)
         t, u, y = read_csv(args.data)
         options = dict(beta=args.beta, S0=args.S0, C=C, hold=args.hold, engine=args.engine,
-                       bounds=args.bounds, method=args.method, rtol=args.rtol, atol=args.atol)  # fmt: skip
+                       bounds=args.bounds, method=args.method)  # fmt: skip
+        options |= dict(rtol=args.rtol, atol=args.atol)
         runs = [estimate(t, u, y, k0=k0, **options, **known) for k0 in args.k0]
     except (OSError, ValueError) as error:
         print(f"{parser.prog}: error: {error}", file=sys.stderr)
