@@ -338,7 +338,7 @@ def _table(module: ModuleType, data: Data, runs: list[Run]) -> str:
     """The final estimates and local minima, then the global minimum of each run's cost."""
     end = f"t = {data.t[-1]:g}"
     estimates = [("k0", "C(s)", f"{module.UNKNOWN} at {end}", "local minima of J")]
-    globals_ = [("k0", "C(s)", f"global minimum of J at {end}", "J(global) - J(estimate)")]
+    globals_ = [("k0", "C(s)", f"global minimum of J at {end}", "J(global) - J(estimate)", "ok")]
     for run in runs:
         result = run.result
         minima = ", ".join(f"{value:.6g}" for value in result.minima())
@@ -346,7 +346,9 @@ def _table(module: ModuleType, data: Data, runs: list[Run]) -> str:
         estimates.append((f"{run.k0:g}", run.filter, final, minima))
         best = float(result.global_k[-1])
         where = f"{best:.6g}" + ("" if result.at_global else " (not the estimate)")
-        globals_.append((f"{run.k0:g}", run.filter, where, f"{float(result.cost(best)):.3g}"))
+        where += "" if result.ok else f" (at t = {result.t[-1]:g}, where it stopped)"
+        ok = "yes" if result.ok else f"no: stopped at t = {result.stopped_at:.6g}"
+        globals_.append((f"{run.k0:g}", run.filter, where, f"{float(result.cost(best)):.3g}", ok))
     return "\n".join([f"{module.MODEL}: {data.note}", *_rows(estimates), "", *_rows(globals_)])
 
 
