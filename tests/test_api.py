@@ -189,7 +189,8 @@ def test_fit_finds_the_paper_value_from_the_whole_record(dc_drive):
     result = dc_drive.fit(t, u, y)
     assert result.ok and result.k == pytest.approx(10.0, abs=1e-4)
     noisy = y + np.random.default_rng(0).uniform(-0.02, 0.02, t.size)
-    assert dc_drive.fit(t, u, noisy).k == pytest.approx(10.0, abs=0.1)
+    at_rest = dict(offset=False, initial_state=False)  # the paper's step: from rest, no offset
+    assert dc_drive.fit(t, u, noisy, **at_rest).k == pytest.approx(10.0, abs=0.1)
     error = kind_of(dc_drive.fit, t, u, y, beta=-1)
     assert error.kind == "bad_argument" and "beta" in str(error)
 

@@ -152,19 +152,20 @@ def test_the_global_minimiser_is_the_lowest_point_of_the_exact_cost(absorber, no
 
 def test_fit_is_the_global_minimum_of_the_exact_cost(dc_drive, absorber, noisy_absorber):
     t, u, y = noisy_absorber
+    paper = dict(method="ls", C=None, offset=False, initial_state=False)  # J, from rest
     for beta in (0.0, 0.5):
-        result = absorber.fit(t, u, y, beta=beta)
+        result = absorber.fit(t, u, y, beta=beta, **paper)
         cost = exact_cost(absorber, t, u, y, k0=0.0, beta=beta, S0=0.0, C=None, upto=t.size - 1)
         np.testing.assert_allclose(result.coefficients, cost.coef, rtol=1e-5)
         k = np.linspace(-2.0, 2.0, 40001)
         assert result.k == pytest.approx(k[np.argmin(cost(k))], abs=2e-4)
         assert result.ok and result.cost(result.k) == pytest.approx(cost(result.k), rel=1e-6)
         assert result.minima.size == 2 and result.minima[-1] == pytest.approx(result.k)
-    assert absorber.fit(t, u, y, bounds=(-1.0, 0.0)).k == pytest.approx(-0.233, abs=0.01)
+    assert absorber.fit(t, u, y, bounds=(-1.0, 0.0), **paper).k == pytest.approx(-0.233, abs=0.01)
     t, u = step(10.0)
     y = dc_drive.simulate(t, u, 10.0) + np.random.default_rng(1).uniform(-0.01, 0.01, t.size)
-    assert dc_drive.fit(t, u, y).k == pytest.approx(10.0, abs=0.1)
-    silent = dc_drive.fit(t, np.zeros_like(t), np.zeros_like(t))
+    assert dc_drive.fit(t, u, y, **paper).k == pytest.approx(10.0, abs=0.1)
+    silent = dc_drive.fit(t, np.zeros_like(t), np.zeros_like(t), **paper)
     assert not silent.ok and math.isnan(silent.k) and "no information" in silent.message
 
 
