@@ -17,7 +17,7 @@ DC_DRIVE = str(ROOT / "models" / "dc_drive.bg")
 ABSORBER = [str(ROOT / "models" / "absorber.bg"), "--keep", "tau,l"]
 PAPER = ["--beta", "0.1", "--S0", "1e-4"]
 ABSORBER_DATA = [*ABSORBER, "--t-end", "4", "--noise-uniform", "0.02", *PAPER]
-RUN_KEYS = ["global_k", "global_cost", "ok", "stopped_at", "informed_until"]
+RUN_KEYS = ["global_k", "global_cost", "ok", "stopped_at", "informed_until", "warnings"]
 
 
 def mtt(capsys, *args: str) -> tuple[int, str, str]:
@@ -77,7 +77,7 @@ def test_dc_drive_fig2_numbers(capsys):
     result = estimates(
         capsys, DC_DRIVE, "--t-end", "10", *PAPER, "--filter", "(1+s)^5", "--k0", "0", "5", "20"
     )
-    assert list(result) == ["model", "unknown", "runs"]
+    assert list(result) == ["ok", "model", "unknown", "runs"] and result["ok"]
     assert (result["model"], result["unknown"]) == ("dc_drive", "k")
     for run, k0 in zip(result["runs"], (0.0, 5.0, 20.0), strict=True):
         assert list(run) == ["k0", "filter", "k", "minima", *RUN_KEYS]  # issue 8 added RUN_KEYS
@@ -124,8 +124,11 @@ def test_absorber_fig7_numbers(tmp_path, capsys):
 
 def test_simulated_data_round_trip_through_csv(tmp_path, capsys):
     data = tmp_path / "data.csv"
-    status, _, _ = mtt(capsys, "simulate", DC_DRIVE, "--noise-uniform", "0.01", "--csv", str(data))
-    assert status == 0
+    status, out, _ = mtt(
+        capsys, "simulate", DC_DRIVE, "--noise-uniform", "0.01", "--csv", str(data)
+    )
+    note = "1001 samples simulated with k = 10, input a unit step, noise uniform in [-0.01, 0.01]"
+    assert status == 0 and out == f"wrote {data}: {note} (seed 0)\n"
     t, u, y = np.loadtxt(data, delimiter=",", skiprows=1).T
     assert t.size == 1001 and t[-1] == 10.0 and np.all(u == 1.0)
     measured = estimates(capsys, DC_DRIVE, "--data", str(data), "--k0", "5")
@@ -172,11 +175,14 @@ def test_a_stopped_run_is_reported_with_exit_status_1(capsys):
 @pytest.mark.parametrize(
     "args,message",
     [
-        (["--k0", "1", "--filter", "(1+s"], "<expression>:1:4: error[syntax]"),
-        (["--k0", "1", "--filter", "(1+x)^5"], "unknown name 'x'"),
-        (["--k0", "1", "--filter", "1/s"], "--filter '1/s' is not a polynomial in s"),
-        (["--k0", "1", "--filter", "(1-s)^5"], "C(s) is not stable: it has a root at s = 1"),
-        (["--k0", "1", "--filter", "(1+s)^4"], "C(s) has degree 4; it must exceed"),
+        (["--k0", "1", "--filter", "(1+s"], "C(s) = '(1+s': expected ')', found the end"),
+        (["--k0", "1", "--filter", "(1+x)^5"], "cannot read 'x)^5' at character 4"),
+        (["--k0", "1", "--filter", "1/s"], "C(s) = '1/s': divide only by a non-zero number"),
+        (
+            ["--k0", "1", "--filter", "(1-s)^5"],
+            "C(s) = '(1-s)^5' is not stable: it has a root at s = 1",
+        ),
+        (["--k0", "1", "--filter", "(1+s)^4"], "C(s) = '(1+s)^4' has degree 4; it must exceed"),
         (["--k0", "1", "--S0", "0"], "S0 must be > 0"),
         (["--k0", "1", "--beta", "-1"], "beta must be >= 0"),
         (["--k0", "nan"], "k0 must be finite"),
@@ -185,10 +191,10 @@ def test_a_stopped_run_is_reported_with_exit_status_1(capsys):
         (["--k0", "1", "--cost-plot", "c.png", "--cost-range", "1", "0"], "needs A < B"),
         (["--k0", "1", "--data", "d.csv", "--k", "3"], "--data and --k do not go together"),
         (["--k0", "1", "--data", "missing.csv"], "missing.csv: No such file or directory"),
-        (["--k0", "1", "--signal", "bad.csv"], "bad.csv: no column 'u'"),
-        (["--k0", "1", "--data", "nan.csv"], "y[1] is nan: every value must be finite"),
+        (["--k0", "1", "--signal", "bad.csv"], "bad.csv:1: no column 'u' (the header names t, v)"),
+        (["--k0", "1", "--data", "nan.csv"], "nan.csv:3: column 'y' holds 'nan', not a number"),
         (["--k0", "1", "--data", "back.csv"], "t must be strictly increasing"),
-        (["--k0", "1", "--data", "text.csv"], "text.csv:3: expected numbers in columns t, u, y"),
+        (["--k0", "1", "--data", "text.csv"], "text.csv:3: column 'u' holds 'one', not a number"),
         (["--k0", "1", "--set", "zz=1"], "error[undeclared_parameter]"),
         ([], "the following arguments are required: --k0"),
     ],
@@ -243,3 +249,114 @@ def test_engines_and_bounds_from_the_command_line(capsys):
     assert bounded["runs"][0]["global_k"] == pytest.approx(-0.232, abs=1e-3)
     status, _, err = mtt(capsys, "estimate", *ABSORBER_DATA, "--k0", "1", "--bounds", "1", "0")
     assert status == 2 and "bounds must be (lo, hi) with lo < hi, not (1.0, 0.0)" in err
+
+
+# mtt fit -------------------------------------------------------------------------------
+
+PRBS = ["--signal", "prbs", "--period", "1", "--t-end", "200", "--dt", "0.02", "--hold", "zoh"]
+
+
+def test_fit_of_simulated_noisy_data(tmp_path, capsys):
+    plot = tmp_path / "fit.png"
+    status, out, err = mtt(capsys, "fit", DC_DRIVE, *PRBS, "--noise-snr", "10", "--plot", str(plot),
+                           "--dpi", "60")  # fmt: skip
+    assert status == 0 and err == ""
+    lines = out.splitlines()
+    assert lines[0].startswith(
+        "dc_drive: 10001 samples simulated with k = 10, input prbs, amplitude 1, period 1"
+    )
+    assert lines[0].endswith("white Gaussian noise at 10 dB SNR (seed 0)")
+    k, se = (float(word) for word in lines[1].split()[2:5:2])
+    assert lines[1].startswith("  k = ") and abs(k - 10) < 4 * se and 0.05 < se < 0.3
+    assert plot.read_bytes()[:4] == b"\x89PNG"
+    status, out, _ = mtt(
+        capsys, "fit", DC_DRIVE, *PRBS, "--noise-snr", "10", "--json", "--method", "ls"
+    )
+    record = json.loads(out)
+    assert record["ok"] and record["method"] == "ls" and record["iterations"] == 0
+    assert set(record) >= {"k", "k_se", "ci", "fit_percent", "residual_rms", "warnings", "minima"}
+
+
+def test_fit_combines_several_files_and_names_their_columns(tmp_path, capsys):
+    paths = []
+    for seed in (1, 2):
+        path = tmp_path / f"run{seed}.csv"
+        status, _, _ = mtt(capsys, "simulate", DC_DRIVE, *PRBS, "--t-end", "60", "--seed",
+                           str(seed), "--noise-snr", "20", "--csv", str(path))  # fmt: skip
+        text = path.read_text().replace("t,u,y", "time,volts,speed", 1)
+        path.write_text(text)
+        paths += ["--data", str(path)]
+    status, out, err = mtt(capsys, "fit", DC_DRIVE, *paths, "--columns", "time,volts,speed",
+                           "--hold", "zoh", "--json")  # fmt: skip
+    assert status == 0, err
+    record = json.loads(out)
+    assert (
+        record["ok"] and len(record["offsets"]) == 2 and abs(record["k"] - 10) < 4 * record["k_se"]
+    )
+    assert record["data"][1].endswith("run2.csv")
+    status, out, err = mtt(capsys, "fit", DC_DRIVE, *paths, "--json")
+    assert status == 2 and "run1.csv:1: no column 't' (the header names time, volts, speed)" in err
+    assert json.loads(out)["ok"] is False
+    status, _, err = mtt(capsys, "estimate", DC_DRIVE, *paths, "--k0", "1")
+    assert status == 2 and "estimate takes one --data (2 given)" in err
+
+
+def test_fit_warnings_go_to_stderr(capsys):
+    status, out, err = mtt(capsys, "fit", DC_DRIVE, "--t-end", "10")
+    assert status == 0 and "k = 10 " in out
+    assert err.startswith("mtt fit: warning: the input is constant: it excites nothing that the")
+    status, out, err = mtt(capsys, "fit", DC_DRIVE, "--t-end", "10", "--no-offset",
+                           "--no-initial-state")  # fmt: skip
+    assert status == 0 and err == ""
+    status, out, err = mtt(capsys, "fit", DC_DRIVE, "--signal", "step", "--amplitude", "0")
+    assert status == 1 and "no estimate: the data carry no information about k" in out
+    assert "mtt fit: warning: the input is zero" in err
+
+
+@pytest.mark.parametrize(
+    "args,message",
+    [
+        (["--filter", "(1+s)^400"], "the exponent 400 must be a whole number from 0 to 24"),
+        (["--filter", "(1+sqrt(-1)*s)^5"], "cannot read 'qrt(-1)*s)^5'"),
+        (["--filter", "(1+1e-300*s)^5"], "its leading coefficient underflows to 0"),
+        (["--filter", "(1+s)^5", "--filter-T", "2"], "--filter and --filter-T do not go together"),
+        (["--set", "ra=1e400"], "error[out_of_range]: a coefficient of Theta, 1000000"),
+        (["--keep", "ra", "--set", "ra=1e400"], "error[out_of_range]: the value of ra, 10000"),
+        (["--signal", "chirp"], "chirp: No such file or directory"),
+        (["--signal", "step", "--period", "2"], "--period applies to prbs, square and multisine"),
+        (["--columns", "a,b"], "--columns names the columns of --data files"),
+        (["--dpi", "0", "--plot", "p.png"], "--dpi must be from 10 to 2400"),
+        (
+            ["--data", "header.csv"],
+            "header.csv: no data: the file has a header row and nothing after it",
+        ),
+        (
+            ["--data", "bom.csv", "--data", "dup.csv"],
+            "dup.csv:1: the header names the column 'u' twice",
+        ),
+        (["--data", "under.csv"], "under.csv:2: column 'y' holds '1_0', not a number"),
+        (["--data", "latin.csv"], "latin.csv: not UTF-8 text"),
+    ],
+)
+def test_fit_user_errors_exit_2(args, message, tmp_path, monkeypatch, capsys):
+    monkeypatch.chdir(tmp_path)
+    Path("header.csv").write_text("t,u,y\n")
+    Path("bom.csv").write_bytes("\ufefft,u,y\n0,1,0\n1,1,1\n2,1,0\n".encode())
+    Path("dup.csv").write_text("t,u,u\n0,1,0\n")
+    Path("under.csv").write_text("t,u,y\n0,1,1_0\n")
+    Path("latin.csv").write_bytes(b"t,u,y\n0,1,\xe9\n")
+    status, _, err = mtt(capsys, "fit", DC_DRIVE, *args)
+    assert status == 2 and message in err and "Traceback" not in err
+
+
+def test_json_results_say_ok(tmp_path, capsys):
+    status, out, _ = mtt(capsys, "compile", DC_DRIVE, "-o", str(tmp_path), "--json")
+    assert status == 0 and json.loads(out) == {
+        "ok": True, "path": str(tmp_path / "dc_drive.py"), "model": "dc_drive", "unknown": "k",
+        "n": 4, "m": 2, "N": 1, "kept": [],
+    }  # fmt: skip
+    status, out, _ = mtt(capsys, "simulate", DC_DRIVE, "--t-end", "1", "--dt", "0.5", "--json")
+    record = json.loads(out)
+    assert status == 0 and record["ok"] and record["t"] == [0.0, 0.5, 1.0] and len(record["y"]) == 3
+    status, out, _ = mtt(capsys, "simulate", DC_DRIVE, "--dt", "-1", "--json")
+    assert status == 2 and json.loads(out)["ok"] is False

@@ -12,19 +12,18 @@ import csv
 import io
 import json
 import sys
+import warnings
 from collections.abc import Callable
 from dataclasses import dataclass
 from types import ModuleType
 
 import numpy as np
-import sympy
 from tqdm import tqdm
 
 from mtt.cli.experiment_args import DEFAULT_DT, DEFAULT_SEED, DEFAULT_T_END
 from mtt.cli.options import choice_from_args
 from mtt.derivation import pipeline
 from mtt.estimator import codegen
-from mtt.language.parse import LAPLACE, parse_expression
 
 EXIT_OK, EXIT_STOPPED, EXIT_USAGE = 0, 1, 2
 MAX_SAMPLES = 10**7
@@ -47,12 +46,21 @@ class Data:
     note: str  # where the data came from, for tables and titles
 
 
-def _signal(module: ModuleType, args) -> tuple[np.ndarray, np.ndarray]:
-    """The input samples: a unit step from t = 0 on a regular grid, or a CSV file's."""
-    if args.signal not in (None, "step"):
-        if args.t_end is not None or args.dt is not None:
-            raise UsageError("--t-end and --dt apply to --signal step; the file gives the times")
-        return module.read_csv(args.signal, ("t", "u"))
+SIGNAL_KINDS = ("step", "prbs", "square", "multisine")
+
+
+def _signal(module: ModuleType, args) -> tuple[np.ndarray, np.ndarray, str]:
+    """The input samples and a description: a test signal on a regular grid from t = 0
+    (step by default), or a CSV file's t,u columns."""
+    kind = args.signal or "step"
+    if kind not in SIGNAL_KINDS:
+        if args.t_end is not None or args.dt is not None or args.period is not None:
+            raise UsageError(
+                "--t-end, --dt and --period apply to a test signal (--signal step|prbs|square|"
+                "multisine); the file gives the times"
+            )
+        t, u = module.read_csv(kind, ("t", "u"))
+        return t, u if args.amplitude is None else args.amplitude * u, kind
     t_end = DEFAULT_T_END if args.t_end is None else args.t_end
     dt = DEFAULT_DT if args.dt is None else args.dt
     if not (0 < dt <= t_end < np.inf):
@@ -60,35 +68,73 @@ def _signal(module: ModuleType, args) -> tuple[np.ndarray, np.ndarray]:
     count = max(1, round(t_end / dt))
     if count >= MAX_SAMPLES:
         raise UsageError(f"--t-end / --dt = {count} samples is too many (at most {MAX_SAMPLES})")
+    if kind == "step" and args.period is not None:
+        raise UsageError("--period applies to prbs, square and multisine, not to a step")
     t = np.linspace(0.0, t_end, count + 1)
-    return t, np.ones_like(t)
+    amplitude = 1.0 if args.amplitude is None else args.amplitude
+    seed = DEFAULT_SEED if args.seed is None else args.seed
+    u = module.input_signal(kind, t, amplitude=amplitude, period=args.period, seed=seed)
+    described = (
+        "a unit step" if kind == "step" and amplitude == 1 else f"{kind}, amplitude {amplitude:g}"
+    )
+    if args.period is not None:
+        described += f", period {args.period:g}"
+    return t, u, described
 
 
-def experiment_data(module: ModuleType, args) -> Data:
-    """Measured data (--data), or a simulation of the model with the chosen input and noise."""
+def experiment_data(module: ModuleType, args, several: bool = False) -> list[Data]:
+    """Measured data (each --data), or a simulation of the model with the chosen input and
+    noise: one record unless `several` (fit) allows more."""
     simulation = {"--signal": args.signal, "--t-end": args.t_end, "--dt": args.dt, "--k": args.k}
-    simulation |= {"--noise-uniform": args.noise_uniform, "--seed": args.seed}
+    simulation |= {"--noise-uniform": args.noise_uniform, "--noise-snr": args.noise_snr}
+    simulation |= {"--seed": args.seed, "--amplitude": args.amplitude, "--period": args.period}
     if getattr(args, "data", None):
         given = [flag for flag, value in simulation.items() if value is not None]
         if given:
             raise UsageError(f"--data and {given[0]} do not go together ({given[0]} simulates)")
-        t, u, y = module.read_csv(args.data)
-        return Data(t, u, y, None, None, f"{t.size} samples from {args.data}")
-    t, u = _signal(module, args)
+        if len(args.data) > 1 and not several:
+            raise UsageError(
+                f"{args.command} takes one --data ({len(args.data)} given); `mtt fit` combines "
+                "several experiments"
+            )
+        columns = _columns(args.columns)
+        records = []
+        for path in args.data:
+            t, u, y = module.read_csv(path, columns)
+            records.append(Data(t, u, y, None, None, f"{t.size} samples from {path}"))
+        return records
+    if getattr(args, "columns", None):
+        raise UsageError("--columns names the columns of --data files")
+    t, u, source = _signal(module, args)
     k = module.TRUE_VALUE if args.k is None else args.k
     if k is None:
         raise UsageError(f"the model gives no value of {module.UNKNOWN} to simulate with: pass --k")
     clean = module.simulate(t, u, k, hold=args.hold)
-    noise = args.noise_uniform or 0.0
-    if not 0 <= noise < np.inf:
-        raise UsageError(f"--noise-uniform must be >= 0, not {noise}")
     seed = DEFAULT_SEED if args.seed is None else args.seed
-    y = clean + np.random.default_rng(seed).uniform(-noise, noise, clean.size) if noise else clean
-    source = "a unit step" if args.signal in (None, "step") else args.signal
     note = f"{t.size} samples simulated with {module.UNKNOWN} = {k:g}, input {source}"
-    if noise:
+    y = clean
+    if args.noise_uniform:
+        noise = args.noise_uniform
+        if not 0 <= noise < np.inf:
+            raise UsageError(f"--noise-uniform must be >= 0, not {noise}")
+        y = clean + np.random.default_rng(seed).uniform(-noise, noise, clean.size)
         note += f", noise uniform in [-{noise:g}, {noise:g}] (seed {seed})"
-    return Data(t, u, y, clean, k, note)
+    elif args.noise_snr is not None:
+        if not np.isfinite(args.noise_snr):
+            raise UsageError(f"--noise-snr must be a finite number of dB, not {args.noise_snr}")
+        y = module.with_noise(clean, args.noise_snr, seed=seed)
+        note += f", white Gaussian noise at {args.noise_snr:g} dB SNR (seed {seed})"
+    return [Data(t, u, y, clean, k, note)]
+
+
+def _columns(text: str | None) -> tuple[str, str, str]:
+    """--columns T,U,Y: the names of the time, input and output columns."""
+    if text is None:
+        return ("t", "u", "y")
+    names = tuple(name.strip() for name in text.split(","))
+    if len(names) != 3 or not all(names) or len(set(names)) != 3:
+        raise UsageError(f"--columns takes three different names T,U,Y, not {text!r}")
+    return names
 
 
 # the runs ------------------------------------------------------------------------------
@@ -101,20 +147,16 @@ class Run:
     result: object  # the generated module's Estimate
 
 
-def _polynomial(text: str) -> list[float]:
-    """--filter "(1+s)^5": a polynomial in s, parsed by mtt's expression grammar."""
-    expr = parse_expression(text, variables=frozenset({LAPLACE}))
-    try:
-        poly = sympy.Poly(expr, sympy.Symbol(LAPLACE))
-    except sympy.PolynomialError:
-        raise UsageError(f"--filter {text!r} is not a polynomial in {LAPLACE}") from None
-    return [float(c) for c in poly.all_coeffs()]
-
-
 def _filters(module: ModuleType, args) -> list[tuple[str, object]]:
-    """(label, C) for each filter asked for: C as the generated `estimate` takes it."""
+    """(label, C) for each filter asked for: C as the generated `estimate` takes it (text is
+    read by the module's own parser, the same as its command line's)."""
     power = module.n + 1
-    filters = [(text.strip(), _polynomial(text)) for text in args.filter or []]
+    filters = []
+    for text in args.filter or []:
+        text = text.strip()
+        if text != "auto":
+            module.filter_polynomial(text)  # a bad filter is an error before any run
+        filters.append((text, text))
     for T in args.filter_T or []:
         filters.append((f"(1 + s)^{power}" if T == 1 else f"(1 + {T:g} s)^{power}", T))
     return filters or [(f"(1 + s)^{power}", None)]
@@ -190,18 +232,56 @@ def _model(args) -> ModuleType:
 
 
 def guarded(action: Callable[[argparse.Namespace], int]) -> Callable[[argparse.Namespace], int]:
-    """Bad options, data and files end with a message and exit status 2, not a traceback."""
+    """Bad options, data and files end with a message and exit status 2, not a traceback
+    (with --json also {"ok": false, "errors": [...]} on stdout). The estimator's warnings
+    are reported by each command from its results; numpy's floating-point warnings, which
+    the estimator's checks turn into messages, are not shown."""
 
     def run(args) -> int:
+        message = None
         try:
-            return action(args)
+            with warnings.catch_warnings(record=True) as caught, np.errstate(all="ignore"):
+                warnings.simplefilter("always")
+                status = action(args)
+            for warning in caught:
+                if not _handled(warning.category):
+                    print(f"mtt {args.command}: warning: {warning.message}", file=sys.stderr)
+            return status
         except (UsageError, ValueError) as exc:
-            print(f"mtt {args.command}: error: {exc}", file=sys.stderr)
+            message = str(exc)
         except OSError as exc:
-            print(f"mtt {args.command}: error: {exc.filename}: {exc.strerror}", file=sys.stderr)
+            message = f"{exc.filename}: {exc.strerror}" if exc.filename else str(exc)
+        print(f"mtt {args.command}: error: {message}", file=sys.stderr)
+        if getattr(args, "json", False):
+            error = {"file": getattr(args, "file", None), "kind": "usage", "line": None,
+                     "column": None, "message": message, "notes": []}  # fmt: skip
+            print(json.dumps({"ok": False, "errors": [error]}))
         return EXIT_USAGE
 
     return run
+
+
+def _handled(category: type) -> bool:
+    """Warnings a command reports itself (the estimator's) or that say nothing to a user."""
+    return issubclass(category, RuntimeWarning) or category.__name__ == "EstimationWarning"
+
+
+def signal_label(module: ModuleType, role: str) -> str:
+    """What a plot calls the input or the output: the model's words for the source or
+    detector, else what it is (the effort or flow of the component), with its label."""
+    label = getattr(module, role.upper())
+    description = getattr(module, f"{role.upper()}_DESCRIPTION", None)
+    if description:
+        return f"{description} ({label})"
+    kind, _, name = label.partition(":")
+    quantity = "effort" if kind in ("Se", "De") else "flow"
+    where = "of the source" if role == "input" else "at the detector"
+    return f"{role}: {quantity} {where} {name} ({label})"
+
+
+def warn(command: str, texts) -> None:
+    for text in texts:
+        print(f"mtt {command}: warning: {text}", file=sys.stderr)
 
 
 def cmd_compile(args) -> int:
@@ -210,6 +290,11 @@ def cmd_compile(args) -> int:
     path = codegen.output_path(args.path, theta)
     codegen.write_atomic(path, source)
     kept = f", {', '.join(theta.symbols)} kept symbolic" if theta.symbols else ""
+    if args.json:
+        print(json.dumps({"ok": True, "path": str(path), "model": theta.model,
+                          "unknown": theta.unknown, "n": theta.n, "m": theta.m, "N": theta.N,
+                          "kept": list(theta.symbols)}))  # fmt: skip
+        return EXIT_OK
     print(
         f"wrote {path}: estimator of {theta.unknown} for {theta.model} "
         f"(n = {theta.n}, m = {theta.m}, N = {theta.N}{kept})"
@@ -221,18 +306,25 @@ def cmd_simulate(args) -> int:
     from mtt.cli import plots  # matplotlib takes a quarter second to import: only plotting pays
 
     module = _model(args)
-    data = experiment_data(module, args)
+    (data,) = experiment_data(module, args)
     if args.data_plot:
         plots.data(
             args.data_plot, data.t, data.u, data.y, clean=data.clean,
-            title=f"{module.MODEL}: {data.note}", input_label=module.INPUT,
-            output_label=module.OUTPUT,
+            title=f"{module.MODEL}: {data.note}", input_label=signal_label(module, "input"),
+            output_label=signal_label(module, "output"), dpi=args.dpi,
         )  # fmt: skip
-    text = _csv_text(["t", "u", "y"], zip(data.t, data.u, data.y, strict=True))
     if args.csv:
-        codegen.write_atomic(args.csv, text)
+        codegen.write_atomic(
+            args.csv, _csv_text(["t", "u", "y"], zip(data.t, data.u, data.y, strict=True))
+        )
+    if args.json:
+        arrays = {name: getattr(data, name).tolist() for name in ("t", "u", "y")}
+        print(json.dumps({"ok": True, "model": module.MODEL, "note": data.note, "csv": args.csv,
+                          **arrays}))  # fmt: skip
+    elif args.csv:
+        print(f"wrote {args.csv}: {data.note}")
     elif not args.data_plot:
-        sys.stdout.write(text)
+        sys.stdout.write(_csv_text(["t", "u", "y"], zip(data.t, data.u, data.y, strict=True)))
     return EXIT_OK
 
 
@@ -243,12 +335,13 @@ def cmd_estimate(args) -> int:
         low, high = args.cost_range
         raise UsageError(f"--cost-range needs A < B, not {low:g} {high:g}")
     module = _model(args)
-    data = experiment_data(module, args)
+    (data,) = experiment_data(module, args)
     runs = run_all(module, data, args)
     labels = _labels(runs)
     curves = [
         plots.Curve(label, run.result.t, run.result.khat, run.result.minima(),
-                    run.result.normalised_cost, run.result.global_k)
+                    run.result.normalised_cost, run.result.global_k,
+                    _band(module, data, run, args) if args.plot else None)
         for label, run in zip(labels, runs, strict=True)
     ]  # fmt: skip
     title = f"{module.MODEL}: {data.note}"
@@ -258,18 +351,19 @@ def cmd_estimate(args) -> int:
     if args.data_plot:
         plots.data(
             args.data_plot, data.t, data.u, data.y, clean=data.clean, title=title,
-            input_label=module.INPUT, output_label=module.OUTPUT,
+            input_label=signal_label(module, "input"),
+            output_label=signal_label(module, "output"), dpi=args.dpi,
         )  # fmt: skip
     if args.plot:
         plots.estimates(
             args.plot, curves, unknown=module.UNKNOWN, true_value=data.k,
-            title=f"{module.MODEL}: estimate of {module.UNKNOWN} ({settings})",
+            title=f"{module.MODEL}: estimate of {module.UNKNOWN} ({settings})", dpi=args.dpi,
         )  # fmt: skip
     if args.cost_plot:
         plots.cost(
             args.cost_plot, curves, k_range=_cost_range(runs, data, args.cost_range),
             unknown=module.UNKNOWN, true_value=data.k,
-            title=f"{module.MODEL}: normalised cost at t = {data.t[-1]:g}",
+            title=f"{module.MODEL}: normalised cost at t = {data.t[-1]:g}", dpi=args.dpi,
         )  # fmt: skip
     if args.csv:
         _write_trajectories(args.csv, runs, module.N)
@@ -277,11 +371,28 @@ def cmd_estimate(args) -> int:
         for kind, text in _notes(module, data, run):
             print(f"mtt estimate: {kind}: k0 = {run.k0:g}, C(s) = {run.filter}: {text}",
                   file=sys.stderr)  # fmt: skip
+    for text in dict.fromkeys(text for run in runs for text in run.result.warnings):
+        warn("estimate", [text])
     if args.json:
         print(json.dumps(_record(module, runs)))
     else:
         print(_table(module, data, runs))
     return EXIT_OK if all(run.result.ok for run in runs) else EXIT_STOPPED
+
+
+def _band(module: ModuleType, data: Data, run: Run, args) -> np.ndarray | None:
+    """Half-width of an approximate 95 % band about k^(t): the standard error of the
+    least-squares fit of the same cost over the record (its sandwich variance, which counts
+    the colour of the equation error), scaled by the information gathered, 1/sqrt(J_2)."""
+    result = run.result
+    if not result.ok:
+        return None
+    final = module.fit(data.t, data.u, data.y, method="ls", C=result.filter, beta=args.beta,
+                       hold=args.hold, offset=False, initial_state=False)  # fmt: skip
+    if not np.isfinite(final.k_se):
+        return None
+    J2 = result.J[0]
+    return 1.96 * final.k_se * np.sqrt(J2[-1] / J2)
 
 
 def _notes(module: ModuleType, data: Data, run: Run) -> list[tuple[str, str]]:
@@ -309,6 +420,7 @@ def _notes(module: ModuleType, data: Data, run: Run) -> list[tuple[str, str]]:
 def _record(module: ModuleType, runs: list[Run]) -> dict:
     """The --json record (its shape is a public contract)."""
     return {
+        "ok": all(run.result.ok for run in runs),
         "model": module.MODEL,
         "unknown": module.UNKNOWN,
         "runs": [
@@ -322,6 +434,7 @@ def _record(module: ModuleType, runs: list[Run]) -> dict:
                 "ok": run.result.ok,
                 "stopped_at": run.result.stopped_at,
                 "informed_until": run.result.informed_until,
+                "warnings": list(run.result.warnings),
             }
             for run in runs
         ],

@@ -1,4 +1,4 @@
-"""The arguments of `mtt compile`, `mtt simulate` and `mtt estimate`.
+"""The arguments of `mtt compile`, `mtt simulate`, `mtt estimate` and `mtt fit`.
 
 Kept apart from their implementation (experiment.py, which needs numpy, sympy and
 scipy) so that building the `mtt` parser, for `--help` or for another command, costs
@@ -15,13 +15,17 @@ from mtt.cli.options import add_parameter_options
 DEFAULT_T_END, DEFAULT_DT, DEFAULT_SEED = 10.0, 0.01, 0
 
 
-def _implementation(name: str) -> Callable[[argparse.Namespace], int]:
-    """The command `name` of experiment.py, imported when it runs."""
+def _implementation(name: str, module: str = "experiment") -> Callable[[argparse.Namespace], int]:
+    """The command `name` of mtt/cli/MODULE.py (experiment.py unless said), imported when
+    it runs."""
 
     def run(args: argparse.Namespace) -> int:
+        import importlib
+
         from mtt.cli import experiment
 
-        return experiment.guarded(getattr(experiment, name))(args)
+        implementation = importlib.import_module(f"mtt.cli.{module}")
+        return experiment.guarded(getattr(implementation, name))(args)
 
     return run
 
@@ -30,32 +34,79 @@ def _data_options(parser: argparse.ArgumentParser, measured: bool) -> None:
     group = parser.add_argument_group("data")
     if measured:
         group.add_argument(
-            "--data", metavar="FILE.csv", help="measured data: a CSV file with columns t,u,y"
+            "--data",
+            metavar="FILE.csv",
+            action="append",
+            help="measured data: a CSV file with columns t,u,y (see --columns); `fit` takes "
+            "several, one per experiment, and combines them",
+        )
+        group.add_argument(
+            "--columns",
+            metavar="T,U,Y",
+            help="the names of the CSV columns of time, input and output (default t,u,y)",
         )
     group.add_argument(
         "--signal",
-        metavar="step|FILE.csv",
-        help="the simulated input signal: a unit step at t = 0 (default), or a CSV file with "
-        "columns t,u",
+        metavar="KIND|FILE.csv",
+        help="the simulated input: step (default, from t = 0), prbs, square, multisine, or a "
+        "CSV file with columns t,u",
+    )
+    group.add_argument("--amplitude", type=float, help="the input's amplitude (default 1)")
+    group.add_argument(
+        "--period",
+        type=float,
+        help="prbs: the time between switches (default span/100); square: the period (span/10); "
+        "multisine: the fundamental period (the span)",
     )
     group.add_argument("--t-end", type=float, help=f"duration (default {DEFAULT_T_END:g})")
     group.add_argument("--dt", type=float, help=f"sampling interval (default {DEFAULT_DT:g})")
     group.add_argument("--k", type=float, help="true value of the unknown (default: the file's)")
-    group.add_argument(
+    noise = group.add_mutually_exclusive_group()
+    noise.add_argument(
         "--noise-uniform", type=float, metavar="A", help="add noise uniform in [-A, A] to y"
     )
-    group.add_argument("--seed", type=int, help=f"noise seed (default {DEFAULT_SEED})")
+    noise.add_argument(
+        "--noise-snr",
+        type=float,
+        metavar="DB",
+        help="add white Gaussian noise to y at this signal-to-noise ratio in dB (the output's "
+        "variance over the noise's)",
+    )
+    group.add_argument(
+        "--seed", type=int, help=f"seed of the noise and the PRBS (default {DEFAULT_SEED})"
+    )
     group.add_argument(
         "--hold",
         choices=("linear", "zoh"),
         default="linear",
-        help="how the input varies between samples (default linear)",
+        help="how the input varies between samples (default linear; zoh: held, as from a DAC)",
     )
     group.add_argument("--data-plot", metavar="FILE.png", help="plot input and output")
+    group.add_argument(
+        "--dpi", type=float, default=120.0, help="resolution of the figures (default 120)"
+    )
+
+
+def _filter_options(group, several: bool, default: str | None) -> None:
+    """--filter and --filter-T, spelled as in the generated modules' own command line."""
+    group.add_argument(
+        "--filter",
+        nargs="+" if several else None,
+        metavar="C(s)",
+        help='the filter: "auto" (chosen from A(s, k) and the sampling) or a polynomial in s, '
+        f'e.g. "(1+s)^5" (default {default})',
+    )
+    group.add_argument(
+        "--filter-T",
+        type=float,
+        nargs="+" if several else None,
+        metavar="T",
+        help="the filter(s) (1 + sT)^(n+1)",
+    )
 
 
 def register(commands) -> None:
-    """Add compile, simulate and estimate to the `mtt` subcommands."""
+    """Add compile, simulate, estimate and fit to the `mtt` subcommands."""
     compile_ = commands.add_parser(
         "compile",
         help="write the estimator module of a model",
@@ -72,6 +123,7 @@ def register(commands) -> None:
         "generated/MODEL.py); a link is written through, a device or fifo refused",
     )
     add_parameter_options(compile_)
+    compile_.add_argument("--json", action="store_true", help="print what was written as JSON")
     compile_.set_defaults(run=_implementation("cmd_compile"))
 
     simulate = commands.add_parser(
@@ -84,6 +136,9 @@ def register(commands) -> None:
     add_parameter_options(simulate)
     _data_options(simulate, measured=False)
     simulate.add_argument("--csv", metavar="FILE", help="write the samples (t,u,y)")
+    simulate.add_argument(
+        "--json", action="store_true", help="print the samples as JSON arrays t, u, y"
+    )
     simulate.set_defaults(run=_implementation("cmd_simulate"))
 
     estimate = commands.add_parser(
@@ -103,15 +158,7 @@ def register(commands) -> None:
     )
     group.add_argument("--beta", type=float, default=0.1, help="forgetting factor (default 0.1)")
     group.add_argument("--S0", type=float, default=1e-4, help="initial weight (default 1e-4)")
-    group.add_argument(
-        "--filter",
-        nargs="+",
-        metavar="C(s)",
-        help='filter polynomial(s) in s, e.g. "(1+s)^5" (default (1 + s)^(n+1))',
-    )
-    group.add_argument(
-        "--filter-T", type=float, nargs="+", metavar="T", help="filter(s) (1 + sT)^(n+1)"
-    )
+    _filter_options(group, several=True, default="(1 + s)^(n+1)")
     group.add_argument(
         "--engine",
         choices=("moments", "ode"),
@@ -136,3 +183,52 @@ def register(commands) -> None:
     outputs.add_argument("--csv", metavar="FILE", help="write the trajectories as CSV")
     outputs.add_argument("--json", action="store_true", help="print the results as JSON")
     estimate.set_defaults(run=_implementation("cmd_estimate"))
+
+    fit = commands.add_parser(
+        "fit",
+        help="fit the unknown to whole records, with its uncertainty",
+        description="Fit the unknown to whole records (measured, several --data combined, or "
+        "simulated) with the generated module's `fit`: refined instrumental variables by "
+        "default (unbiased under output noise), offsets and initial state estimated; print "
+        "the estimate, its standard error and 95 % interval, the fit and every warning. "
+        "Exit status 1 when there is no estimate (the data do not determine the unknown).",
+    )
+    fit.add_argument("file", metavar="FILE")
+    add_parameter_options(fit)
+    _data_options(fit, measured=True)
+    group = fit.add_argument_group("estimator")
+    group.add_argument(
+        "--method",
+        choices=("iv", "ls"),
+        default="iv",
+        help="iv: refined instrumental variables (default); ls: the paper's least squares",
+    )
+    _filter_options(group, several=False, default="auto")
+    group.add_argument(
+        "--k0", type=float, help="where the iterations start (default: least squares)"
+    )
+    group.add_argument(
+        "--bounds", type=float, nargs=2, metavar=("LO", "HI"), help="look for k within [LO, HI]"
+    )
+    group.add_argument(
+        "--offset",
+        action=argparse.BooleanOptionalAction,
+        default=True,
+        help="estimate a constant offset of the output (an operating point; default on)",
+    )
+    group.add_argument(
+        "--initial-state",
+        action=argparse.BooleanOptionalAction,
+        default=True,
+        help="allow the system not to be at rest at the first sample (default on)",
+    )
+    group.add_argument("--beta", type=float, default=0.0, help="forgetting factor (default 0)")
+    outputs = fit.add_argument_group("outputs")
+    outputs.add_argument(
+        "--plot", metavar="FILE.png", help="plot measured and simulated output and the residuals"
+    )
+    outputs.add_argument(
+        "--csv", metavar="FILE", help="write t, u, y, the fitted output and the residual"
+    )
+    outputs.add_argument("--json", action="store_true", help="print the result as JSON")
+    fit.set_defaults(run=_implementation("cmd_fit", "fitting"))

@@ -36,6 +36,7 @@ class Curve:
     minima: np.ndarray  # local minima of the cost at the last time
     normalised_cost: object  # k -> (J(k) - J(k^)) / J_2(k^) at the last time
     global_k: np.ndarray  # the global minimiser of the cost at each time
+    band: np.ndarray | None = None  # half-width of an approximate 95 % band about khat
 
 
 def _figure(heights: tuple[int, ...] = (1,)) -> tuple[Figure, list]:
@@ -48,10 +49,12 @@ def _figure(heights: tuple[int, ...] = (1,)) -> tuple[Figure, list]:
     return figure, list(axes)
 
 
-def _save(figure: Figure, path: str | Path) -> None:
+def _save(figure: Figure, path: str | Path, dpi: float) -> None:
+    if not (np.isfinite(dpi) and 10 <= dpi <= 2400):
+        raise ValueError(f"--dpi must be from 10 to 2400, not {dpi:g}")
     buffer = io.BytesIO()
     suffix = Path(path).suffix.lstrip(".").lower() or "png"
-    figure.savefig(buffer, format=suffix, dpi=120)
+    figure.savefig(buffer, format=suffix, dpi=dpi)
     write_atomic(path, buffer.getvalue())
 
 
@@ -62,18 +65,29 @@ def estimates(
     title: str,
     unknown: str,
     true_value: float | None,
+    dpi: float = 120.0,
 ) -> None:
-    """The estimate against time, one line per run (the paper's Figs. 2, 6 and 7), and,
-    dotted where it differs from the estimate, the global minimiser of the cost."""
+    """The estimate against time, one line per run (the paper's Figs. 2, 6 and 7), its
+    approximate 95 % band shaded, and, dotted where it differs from the estimate, the
+    global minimiser of the cost."""
     figure, (ax,) = _figure()
     for curve in curves:
         (line,) = ax.plot(curve.t, curve.khat, label=curve.label, linewidth=1.4)
+        if curve.band is not None:
+            ax.fill_between(curve.t, curve.khat - curve.band, curve.khat + curve.band,
+                            color=line.get_color(), alpha=0.15, linewidth=0)  # fmt: skip
         apart = np.abs(curve.global_k - curve.khat) > 1e-6 * (np.abs(curve.khat) + 1e-300)
         if apart.any():
             ax.plot(curve.t, np.where(apart, curve.global_k, np.nan), ":", linewidth=1.0,
                     color=line.get_color())  # fmt: skip
     if any((np.abs(c.global_k - c.khat) > 1e-6 * np.abs(c.khat)).any() for c in curves):
         ax.plot([], [], ":", color="gray", label="global minimum of J")
+    if any(curve.band is not None for curve in curves):
+        ax.fill_between([], [], [], color="gray", alpha=0.15, label="approximate 95 % band")
+        values = np.concatenate([curve.khat for curve in curves] + [[true_value or curve.khat[-1]]])
+        low, high = float(values.min()), float(values.max())
+        pad = 0.1 * (high - low) or 0.1 * abs(high) or 1.0
+        ax.set_ylim(low - pad, high + pad)  # the early band is wide: keep the estimates in view
     if true_value is not None:
         ax.axhline(true_value, color="black", linestyle="--", linewidth=0.9,
                    label=f"true value {unknown} = {true_value:g}")  # fmt: skip
@@ -81,7 +95,7 @@ def estimates(
     ax.set_ylabel(f"estimate {_hat(unknown)} of {unknown}")
     ax.set_title(title, fontsize="medium")
     ax.legend(loc="best", fontsize="small")
-    _save(figure, path)
+    _save(figure, path, dpi)
 
 
 def cost(
@@ -92,8 +106,10 @@ def cost(
     title: str,
     unknown: str,
     true_value: float | None,
+    dpi: float = 120.0,
 ) -> None:
-    """The normalised cost against k at the last time, minima marked (the paper's Fig. 8)."""
+    """The normalised cost against k at the last time, minima marked (the paper's Fig. 8);
+    the legend beside the axes, where it covers no curve."""
     figure, (ax,) = _figure()
     k = np.linspace(*k_range, 801)
     for curve in curves:
@@ -108,8 +124,9 @@ def cost(
     hat = _hat(unknown)
     ax.set_ylabel(f"normalised cost  (J({unknown}) \u2212 J({hat})) / J\u2082({hat})")
     ax.set_title(title, fontsize="medium")
-    ax.legend(loc="best", fontsize="small", title="dots: local minima", title_fontsize="small")
-    _save(figure, path)
+    figure.legend(loc="outside right upper", fontsize="small", title="dots: local minima",
+                  title_fontsize="small")  # fmt: skip
+    _save(figure, path, dpi)
 
 
 def data(
@@ -122,16 +139,56 @@ def data(
     input_label: str,
     output_label: str,
     clean: np.ndarray | None = None,
+    dpi: float = 120.0,
 ) -> None:
-    """Input and output samples against time (the paper's Fig. 5), and the noise-free output."""
+    """Input and output samples against time (the paper's Fig. 5), and the noise-free output.
+    The labels say what the signals are (the model's words for the source and detector)."""
     figure, (top, bottom) = _figure(heights=(1, 3))
     top.plot(t, u, color="tab:gray", linewidth=1.2)
-    top.set_ylabel(f"input {input_label}")
+    top.set_ylabel("\n".join(textwrap.wrap(input_label, 24)))
     top.set_title("\n".join(textwrap.wrap(title, 80)), fontsize="medium")
     bottom.plot(t, y, linewidth=0.9, label="output samples")
     if clean is not None and not np.array_equal(clean, y):
         bottom.plot(t, clean, color="black", linestyle="--", linewidth=1.0, label="without noise")
         bottom.legend(loc="best", fontsize="small")
-    bottom.set_ylabel(f"output {output_label}")
+    bottom.set_ylabel("\n".join(textwrap.wrap(output_label, 30)))
     bottom.set_xlabel("time t (s)")
-    _save(figure, path)
+    _save(figure, path, dpi)
+
+
+@dataclass(frozen=True)
+class Record:
+    """One record of a fit, as the plot needs it."""
+
+    label: str
+    t: np.ndarray
+    y: np.ndarray
+    fitted: np.ndarray
+
+
+def fit(path: str | Path, records: Sequence[Record], *, title: str, output_label: str,
+        dpi: float = 120.0) -> None:  # fmt: skip
+    """Measured and simulated output, and the residuals below, one column per record (at
+    most four): what the compare plots of system-identification toolboxes show."""
+    shown = records[:4]
+    figure = Figure(figsize=(min(4.0 + 3.0 * len(shown), 14.0), 5.6), layout="constrained")
+    FigureCanvasAgg(figure)
+    axes = figure.subplots(2, len(shown), sharex="col", squeeze=False, height_ratios=(3, 1))
+    for column, record in enumerate(shown):
+        top, bottom = axes[0, column], axes[1, column]
+        top.plot(record.t, record.y, color="tab:gray", linewidth=0.8, label="measured")
+        top.plot(record.t, record.fitted, color="tab:blue", linewidth=1.2, label="model")
+        bottom.plot(record.t, record.y - record.fitted, color="tab:red", linewidth=0.6)
+        bottom.axhline(0.0, color="black", linewidth=0.6)
+        top.set_title(
+            "\n".join(textwrap.wrap(record.label, 40 if len(shown) > 1 else 90)), fontsize="small"
+        )
+        bottom.set_xlabel("time t (s)")
+        for ax in (top, bottom):
+            ax.grid(True, alpha=0.3)
+    axes[0, 0].set_ylabel("\n".join(textwrap.wrap(output_label, 30)))
+    axes[1, 0].set_ylabel("residual")
+    axes[0, 0].legend(loc="best", fontsize="small")
+    more = f" (the first 4 of {len(records)} records)" if len(records) > 4 else ""
+    figure.suptitle("\n".join(textwrap.wrap(title + more, 90)), fontsize="medium")
+    _save(figure, path, dpi)

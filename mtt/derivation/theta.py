@@ -41,6 +41,8 @@ class Theta:
     m: int  # degree of num in s
     monomials: tuple[Monomial, ...]  # the column monomials K_j: exponents per unknown
     matrix: sympy.Matrix  # (n + 1 + m + 1) x len(monomials): rows a0..an, -b0..-bm
+    input_description: str | None = None  # the source's description in the model, if any
+    output_description: str | None = None  # the detector's
 
     @property
     def unknown(self) -> str | None:
@@ -143,4 +145,6 @@ def theta_matrix(tf: TransferFunction) -> Theta:
         m=m,
         monomials=monomials,
         matrix=matrix,
+        input_description=graph.component(graph.input).description,
+        output_description=graph.component(graph.output).description,
     )

@@ -11,8 +11,10 @@ is safe to run, and the same Theta always gives the same bytes.
 from __future__ import annotations
 
 import errno
+import importlib.machinery
 import importlib.util
 import keyword
+import math
 import os
 import re
 import stat
@@ -35,7 +37,7 @@ from mtt.resources import resource_dir
 # argument (`estimate(..., tau=2)`), must not take one of them.
 RESERVED = frozenset(
     {"t", "u", "y", "k", "k0", "beta", "S0", "C", "hold", "method", "rtol", "atol"}
-    | {"max_step", "progress", "engine", "bounds", "self", "known"}
+    | {"max_step", "progress", "engine", "bounds", "self", "known", "offset", "initial_state"}
 )
 # Characters that sympy's printing of an exact number may use; text made only of them
 # cannot end a docstring or a string literal.
@@ -46,8 +48,28 @@ def _fail(theta: Theta, kind: str, message: str) -> ModelError:
     return ModelError(Source(theta.source_name, ""), [error(kind, message)])
 
 
+def _shadows(name: str) -> bool:
+    """Whether an estimator module of this name would shadow a module for code run beside
+    it: one of the standard library's, or one installed (numpy, scipy, ...). The current
+    directory is not looked in: an estimator written there before is no module to keep."""
+    if name in sys.stdlib_module_names or name in sys.builtin_module_names:
+        return True
+    here = {"", os.getcwd()}
+    return (
+        importlib.machinery.PathFinder.find_spec(name, [p for p in sys.path if p not in here])
+        is not None
+    )
+
+
 def _check(theta: Theta) -> None:
     """Reject what the generated module could not carry safely or use meaningfully."""
+    if _shadows(theta.model):
+        raise _fail(
+            theta,
+            "reserved_name",
+            f"the model name {theta.model!r} is the name of a Python module: the estimator "
+            f"module {theta.model}.py would shadow it wherever it is imported; rename the model",
+        )
     if len(theta.unknowns) > 1:
         raise _fail(
             theta,
@@ -110,10 +132,29 @@ def _wrapped(label: str, polynomial: sympy.Expr) -> str:
     return "\n        ".join(lines)
 
 
+def _in_range(theta: Theta, value: sympy.Expr, name: str | None = None) -> sympy.Expr:
+    """value (of the parameter `name`, or else a coefficient of Theta), unless the module's
+    floating point cannot hold it (it would overflow to inf or vanish): then an error."""
+    what = "a coefficient of Theta" if name is None else f"the value of {name}"
+    try:
+        number = _float(value)
+    except (OverflowError, ValueError):
+        number = math.inf
+    if not math.isfinite(number) or (number == 0 and value != 0):
+        raise _fail(
+            theta,
+            "out_of_range",
+            f"{what}, {sympy.sstr(value)[:40]}, is beyond the floating-point "
+            "range (about 1e-308 to 1e308) that the estimator computes in; give the parameters "
+            "values in units nearer 1",
+        )
+    return value
+
+
 def _entry(theta: Theta, expr: sympy.Expr, symbols: list[sympy.Symbol]) -> str:
     """Python text for one entry of Theta, each kept parameter read as p['name']."""
     if not symbols:
-        return _number(expr)
+        return _number(_in_range(theta, expr))
     try:
         poly = sympy.Poly(expr, *symbols)
     except sympy.PolynomialError:
@@ -125,6 +166,7 @@ def _entry(theta: Theta, expr: sympy.Expr, symbols: list[sympy.Symbol]) -> str:
         ) from None
     terms = []
     for monomial, coefficient in poly.terms():
+        _in_range(theta, coefficient)
         factors = [
             f"p[{symbol.name!r}]" + (f" ** {power}" if power > 1 else "")
             for symbol, power in zip(symbols, monomial, strict=True)
@@ -189,7 +231,11 @@ def _context(theta: Theta) -> dict:
         for i, label in enumerate(theta.row_labels)
     ]
     defaults = {name: theta.defaults.get(name) for name in theta.symbols}
-    example_k = 1.0 if theta.true_value is None else _float(theta.true_value)
+    example_k = (
+        1.0
+        if theta.true_value is None
+        else _float(_in_range(theta, theta.true_value, theta.unknown))
+    )
     return {
         "version": __version__,
         "model": theta.model,
@@ -197,6 +243,8 @@ def _context(theta: Theta) -> dict:
         "source": theta.source_name,
         "input": theta.input,
         "output": theta.output,
+        "input_description": theta.input_description,
+        "output_description": theta.output_description,
         "unknown": theta.unknown,
         "true_value": None if theta.true_value is None else _doc_text(str(theta.true_value)),
         "true_value_float": "None" if theta.true_value is None else repr(example_k),
@@ -214,7 +262,7 @@ def _context(theta: Theta) -> dict:
         ),
         "defaults": "{"
         + ", ".join(
-            f"{name!r}: {'None' if value is None else repr(_float(value))}"
+            f"{name!r}: {'None' if value is None else repr(_float(_in_range(theta, value, name)))}"
             for name, value in defaults.items()
         )
         + "}",
