@@ -1,0 +1,256 @@
+"""Monte Carlo figures of the batch fit (`fit`) on noisy data, against the plain least-squares
+fit and an output-error least-squares reference, all on the same records.
+
+The records are made here, independently of the generated modules: the transfer functions
+of method.md (written out below, not taken from the modules), a PRBS from
+scipy.signal.max_len_seq held between switches, scipy.signal.lsim with a zero-order hold
+(exact for it), and white Gaussian noise on the output samples at a signal-to-noise ratio
+(signal variance over noise variance). `fit` is told the input was held (hold="zoh"), as
+the experiment was made; everything else is its default (method="iv", C="auto", offset
+and initial state estimated).
+
+    .venv/bin/python bench/fit.py             # 100 seeds per row: a few minutes
+    .venv/bin/python bench/fit.py --seeds 50  # the issue's minimum
+"""
+
+from __future__ import annotations
+
+import argparse
+import importlib.util
+import math
+import sys
+import time
+import warnings
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+from scipy import optimize, signal
+
+ROOT = Path(__file__).resolve().parent.parent
+
+
+def generated(name: str):
+    spec = importlib.util.spec_from_file_location(name, ROOT / "generated" / f"{name}.py")
+    module = importlib.util.module_from_spec(spec)
+    sys.modules[name] = module
+    spec.loader.exec_module(module)
+    return module
+
+
+def dc_drive_tf(k: float):
+    """G(s) = 10 (k s^2 + 1) / ((s^3 + 10 s^2 + 11 s + 10) k s + s^2 + 10 s + 10)."""
+    return [10 * k, 0, 10], np.polyadd(k * np.array([1, 10, 11, 10, 0]), [1, 10, 10])
+
+
+def absorber_tf(k: float, tau: float = 2.0, flow: float = 0.5):
+    """G(s) = k^3 / (l [(k + s tau + 1)(3 s tau + 1) k + (s tau + 1)^3 + k^3]), l = flow."""
+    first = np.polymul([tau, k + 1], [3 * tau, 1]) * k
+    cube = np.polymul(np.polymul([tau, 1], [tau, 1]), [tau, 1])
+    return [k**3], flow * np.polyadd(np.polyadd(first, cube), [k**3])
+
+
+@dataclass(frozen=True)
+class Experiment:
+    name: str  # the generated module
+    k: float
+    tf: object
+    t_end: float
+    dt: float
+    hold: float  # the PRBS's time between possible switches
+
+    def times(self) -> np.ndarray:
+        return self.dt * np.arange(round(self.t_end / self.dt) + 1)
+
+    def record(self, seed: int, snr_db: float | None):
+        t = self.times()
+        u = prbs(t, self.hold, seed)
+        clean = signal.lsim(self.tf(self.k), u, t, interp=False)[1]
+        if snr_db is None:
+            return t, u, clean
+        noise = math.sqrt(np.var(clean) / 10 ** (snr_db / 10))
+        return t, u, clean + noise * np.random.default_rng(10_000 + seed).standard_normal(t.size)
+
+
+def prbs(t: np.ndarray, hold: float, seed: int) -> np.ndarray:
+    """+-1, a maximum-length sequence switching at multiples of `hold`, its state seeded."""
+    count = int(math.ceil((t[-1] - t[0]) / hold)) + 1
+    bits = max(4, math.ceil(math.log2(count + 1)))
+    state = np.random.default_rng(seed).integers(0, 2, bits)
+    state[0] = 1 if not state.any() else state[0]
+    sequence = signal.max_len_seq(bits, state=state, length=count)[0]
+    return 2.0 * sequence[np.floor((t - t[0]) / hold + 1e-9).astype(int)] - 1.0
+
+
+EXPERIMENTS = {
+    "dc_drive": Experiment("dc_drive", 10.0, dc_drive_tf, 400.0, 0.02, 1.0),
+    "absorber": Experiment("absorber", 0.72, absorber_tf, 40.0, 0.01, 2.0),
+}
+
+
+def output_error(experiment: Experiment, t, u, y) -> float:
+    """The reference: least squares of y - lsim(G(k)) over k (scipy), from the true value."""
+    k = experiment.k
+
+    def residuals(p):
+        return signal.lsim(experiment.tf(p[0]), u, t, interp=False)[1] - y
+
+    return float(optimize.least_squares(residuals, [k], x_scale=[abs(k)]).x[0])
+
+
+def monte_carlo(module, experiment: Experiment, snr_db: float, seeds: int, reference: int):
+    rows = {"iv": [], "ls": []}
+    times = {"iv": [], "ls": []}
+    oe = []
+    for seed in range(seeds):
+        t, u, y = experiment.record(seed, snr_db)
+        for method in rows:
+            start = time.perf_counter()
+            result = module.fit(t, u, y, hold="zoh", method=method)
+            times[method].append(time.perf_counter() - start)
+            rows[method].append((result.k, result.k_se, result.ci[0], result.ci[1]))
+        if seed < reference:
+            oe.append(output_error(experiment, t, u, y))
+    return {m: np.array(v) for m, v in rows.items()}, times, np.array(oe)
+
+
+def table(rows: list[list[str]]) -> str:
+    widths = [max(len(row[i]) for row in rows) for i in range(len(rows[0]))]
+    lines = [
+        "| " + " | ".join(c.ljust(w) for c, w in zip(row, widths, strict=True)) + " |"
+        for row in rows
+    ]
+    lines.insert(1, "|" + "|".join("-" * (w + 2) for w in widths) + "|")
+    return "\n".join(lines)
+
+
+def noise_rows(seeds: int, reference: int) -> list[list[str]]:
+    header = [
+        "record",
+        "SNR",
+        "method",
+        "bias",
+        "std",
+        "k_se / std",
+        "95 % CI covers",
+        "time per fit",
+    ]
+    rows = [header]
+    for name, experiment in EXPERIMENTS.items():
+        module = generated(name)
+        for snr in (20.0, 10.0):
+            results, times, oe = monte_carlo(module, experiment, snr, seeds, reference)
+            label = (
+                f"{name} (PRBS {experiment.hold:g} s, {experiment.t_end:g} s, dt {experiment.dt:g})"
+            )
+            truth = experiment.k
+            for method, r in results.items():
+                k, se, lo, hi = r.T
+                std = k.std(ddof=1)
+                covered = np.mean((lo <= truth) & (truth <= hi))
+                rows.append([
+                    label, f"{snr:g} dB", f"fit, method={method!r}",
+                    f"{100 * (k.mean() / truth - 1):+.3f} %", f"{100 * std / truth:.3f} %",
+                    f"{se.mean() / std:.2f}", f"{100 * covered:.0f} %",
+                    f"{1e3 * np.median(times[method]):.0f} ms",
+                ])  # fmt: skip
+            if oe.size:
+                rows.append([
+                    rows[-1][0], f"{snr:g} dB", f"output-error LS ({oe.size} seeds)",
+                    f"{100 * (oe.mean() / experiment.k - 1):+.3f} %",
+                    f"{100 * oe.std(ddof=1) / experiment.k:.3f} %", "", "", "",
+                ])  # fmt: skip
+            print(f"  {name} at {snr:g} dB done", file=sys.stderr)
+    return rows
+
+
+def nuisance_rows() -> list[list[str]]:
+    """A 1 % output offset (of the output's peak) plus a non-zero initial state, noise-free."""
+    rows = [
+        [
+            "record",
+            "initial state",
+            "offset",
+            "fit (defaults)",
+            "error",
+            "fit, offset=False, initial_state=False",
+        ]
+    ]
+    for name, experiment in EXPERIMENTS.items():
+        module = generated(name)
+        t = experiment.times()
+        u = prbs(t, experiment.hold, 3)
+        system = signal.StateSpace(*signal.tf2ss(*experiment.tf(experiment.k)))
+        x0 = np.random.default_rng(5).standard_normal(system.A.shape[0])
+        y = signal.lsim(system, u, t, X0=x0, interp=False)[1]
+        y = y + 0.01 * np.abs(y).max()
+        result = module.fit(t, u, y, hold="zoh")
+        plain = module.fit(t, u, y, hold="zoh", offset=False, initial_state=False)
+        error = f"{100 * (result.k / experiment.k - 1):+.2e} %"
+        rows.append([name, "random (seed 5)", "1 % of max |y|", f"{result.k:.6g}", error,
+                     f"{plain.k:.6g}"])  # fmt: skip
+    return rows
+
+
+def speed_rows(repeats: int = 5) -> list[list[str]]:
+    rows = [["record", "samples", "method", "median time", "iterations"]]
+    module = generated("dc_drive")
+    experiment = Experiment("dc_drive", 10.0, dc_drive_tf, 2000.0, 0.02, 1.0)
+    t, u, y = experiment.record(0, 10.0)
+    for method in ("iv", "ls"):
+        spent = []
+        for _ in range(repeats):
+            start = time.perf_counter()
+            result = module.fit(t, u, y, hold="zoh", method=method)
+            spent.append(time.perf_counter() - start)
+        rows.append(["dc_drive, PRBS, 10 dB", f"{t.size:.0e}", method, f"{np.median(spent):.2f} s",
+                     str(result.iterations)])  # fmt: skip
+    return rows
+
+
+def degenerate_rows() -> list[list[str]]:
+    """Records that carry no usable information: what `fit` says of each."""
+    module = generated("dc_drive")
+    t = np.linspace(0.0, 10.0, 1001)
+    step = np.ones_like(t)
+    y = module.simulate(t, step, 10.0)
+    cases = {
+        "constant input": (t, step, y + 0.0),
+        "all-zero input and output": (t, 0 * t, 0 * t),
+        "3 samples": (t[:3], step[:3], y[:3]),
+        "3 samples, offset=False, initial_state=False": (t[:3], step[:3], y[:3]),
+        "times scaled by 1e-300": (t * 1e-300, step, y),
+    }
+    rows = [["record", "outcome"]]
+    for label, (tt, uu, yy) in cases.items():
+        options = {"offset": False, "initial_state": False} if "False" in label else {}
+        try:
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore")
+                result = module.fit(tt, uu, yy, **options)
+            said = "; ".join(result.warnings) or "-"
+            outcome = f"ok={result.ok}, k={result.k:.4g}: {result.message}; warnings: {said}"
+        except ValueError as error:
+            outcome = f"ValueError: {error}"
+        rows.append([label, outcome])
+    return rows
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--seeds", type=int, default=100)
+    parser.add_argument("--reference", type=int, default=20, help="seeds for output-error LS")
+    args = parser.parse_args()
+    warnings.simplefilter("ignore")
+    print(f"Monte Carlo, {args.seeds} seeds per row:\n")
+    print(table(noise_rows(args.seeds, args.reference)))
+    print("\nOffset and initial state, noise-free:\n")
+    print(table(nuisance_rows()))
+    print("\nSpeed:\n")
+    print(table(speed_rows()))
+    print("\nRecords without usable information:\n")
+    print(table(degenerate_rows()))
+
+
+if __name__ == "__main__":
+    main()
