@@ -341,7 +341,7 @@ def cmd_estimate(args) -> int:
     curves = [
         plots.Curve(label, run.result.t, run.result.khat, run.result.minima(),
                     run.result.normalised_cost, run.result.global_k,
-                    _band(module, data, run, args) if args.plot else None)
+                    _band(module, data, run, args) if args.plot and len(runs) == 1 else None)
         for label, run in zip(labels, runs, strict=True)
     ]  # fmt: skip
     title = f"{module.MODEL}: {data.note}"
@@ -381,7 +381,8 @@ def cmd_estimate(args) -> int:
 
 
 def _band(module: ModuleType, data: Data, run: Run, args) -> np.ndarray | None:
-    """Half-width of an approximate 95 % band about k^(t): the standard error of the
+    """Half-width of an approximate 95 % band about k^(t) (drawn for a single run: several
+    would hide one another): the standard error of the
     least-squares fit of the same cost over the record (its sandwich variance, which counts
     the colour of the equation error), scaled by the information gathered, 1/sqrt(J_2)."""
     result = run.result
