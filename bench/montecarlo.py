@@ -9,33 +9,28 @@ scipy.signal.max_len_seq held between switches, scipy.signal.lsim with a zero-or
 the experiment was made; everything else is its default (method="iv", C="auto", offset
 and initial state estimated).
 
-    .venv/bin/python bench/fit.py             # 100 seeds per row: a few minutes
-    .venv/bin/python bench/fit.py --seeds 50  # the issue's minimum
+Times are this process's CPU time with BLAS on one thread (see bench/estimate.py).
+
+    .venv/bin/python bench/montecarlo.py             # 100 seeds per row: a few minutes
+    .venv/bin/python bench/montecarlo.py --seeds 50  # the issue's minimum
 """
 
 from __future__ import annotations
 
-import argparse
-import importlib.util
-import math
-import sys
-import time
-import warnings
-from dataclasses import dataclass
-from pathlib import Path
+import os
 
-import numpy as np
-from scipy import optimize, signal
+os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")  # before numpy loads OpenBLAS
 
-ROOT = Path(__file__).resolve().parent.parent
+import argparse  # noqa: E402
+import math  # noqa: E402
+import sys  # noqa: E402
+import time  # noqa: E402
+import warnings  # noqa: E402
+from dataclasses import dataclass  # noqa: E402
 
-
-def generated(name: str):
-    spec = importlib.util.spec_from_file_location(name, ROOT / "generated" / f"{name}.py")
-    module = importlib.util.module_from_spec(spec)
-    sys.modules[name] = module
-    spec.loader.exec_module(module)
-    return module
+import numpy as np  # noqa: E402
+from _generated import generated  # noqa: E402
+from scipy import optimize, signal  # noqa: E402
 
 
 def dc_drive_tf(k: float):
@@ -105,9 +100,9 @@ def monte_carlo(module, experiment: Experiment, snr_db: float, seeds: int, refer
     for seed in range(seeds):
         t, u, y = experiment.record(seed, snr_db)
         for method in rows:
-            start = time.perf_counter()
+            start = time.process_time()
             result = module.fit(t, u, y, hold="zoh", method=method)
-            times[method].append(time.perf_counter() - start)
+            times[method].append(time.process_time() - start)
             rows[method].append((result.k, result.k_se, result.ci[0], result.ci[1]))
         if seed < reference:
             oe.append(output_error(experiment, t, u, y))
@@ -200,9 +195,9 @@ def speed_rows(repeats: int = 5) -> list[list[str]]:
     for method in ("iv", "ls"):
         spent = []
         for _ in range(repeats):
-            start = time.perf_counter()
+            start = time.process_time()
             result = module.fit(t, u, y, hold="zoh", method=method)
-            spent.append(time.perf_counter() - start)
+            spent.append(time.process_time() - start)
         rows.append(["dc_drive, PRBS, 10 dB", f"{t.size:.0e}", method, f"{np.median(spent):.2f} s",
                      str(result.iterations)])  # fmt: skip
     return rows

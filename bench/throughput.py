@@ -25,8 +25,9 @@ import time  # noqa: E402
 import numpy as np  # noqa: E402
 from _generated import ROOT, generated  # noqa: E402
 
-TARGETS = {"simulate": 1e7, "fit": 5e6, "Tracker, one sample at a time": 2e4,
-           "Tracker, chunks of 1000": 1e6}  # fmt: skip
+TARGETS = {"simulate": 1e7, "moments (least squares)": 5e6, "fit (defaults)": 1e5,
+           "Tracker, one sample at a time": 2e4, "Tracker, chunks of 1000": 1e6}  # fmt: skip
+PAPER = dict(offset=False, initial_state=False)  # the least-squares cost J of the paper
 
 
 def record(module, k: float, samples: int, noise: float, seed: int = 0):
@@ -80,10 +81,15 @@ def main() -> None:
     rows.append(
         ("simulate", "DC drive, 1e6 samples", rate(lambda: dc.simulate(t, u, 10.0), t.size))
     )
-    t, u, y = record(dc, 10.0, 10**6, 0.01)
-    rows.append(("fit", "DC drive, 1e6 samples", rate(lambda: dc.fit(t, u, y), t.size)))
-    t, u, y = record(absorber, 0.72, 10**6, 0.02)
-    rows.append(("fit", "absorber, 1e6 samples", rate(lambda: absorber.fit(t, u, y), t.size)))
+    for module, name, k, noise in (
+        (dc, "DC drive", 10.0, 0.01),
+        (absorber, "absorber", 0.72, 0.02),
+    ):
+        t, u, y = record(module, k, 10**6, noise)
+        moments = rate(lambda m=module, t=t, u=u, y=y: m.moments(t, u, y, **PAPER), t.size)
+        rows.append(("moments (least squares)", f"{name}, 1e6 samples", moments))
+        whole = rate(lambda m=module, t=t, u=u, y=y: m.fit(t, u, y), t.size)  # IV, uncertainty
+        rows.append(("fit (defaults)", f"{name}, 1e6 samples", whole))
     for module, name, k, noise, k0 in ((dc, "DC drive", 10.0, 0.01, 5.0),
                                        (absorber, "absorber", 0.72, 0.02, 1.0)):  # fmt: skip
         data = record(module, k, 2 * 10**5, noise)

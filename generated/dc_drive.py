@@ -15,66 +15,85 @@ The system
     Known values substituted exactly: ra = 1, ia = 1/10, jm = 1, km = 1, ks = 1.
 
 What is assumed
-    The system is linear, single-input single-output, and at rest (zero state) at the
-    first sample time. Its coefficients are the polynomials in k printed in
-    `theta` below: every other parameter is known. Between samples, the output is
-    interpolated linearly, and so is the input (a first-order hold) unless hold="zoh"
-    says it was held from each sample to the next (a zero-order hold).
+    The system is linear and single-input single-output. Its coefficients are the
+    polynomials in k printed in `theta` below: every other parameter is known.
+    Between samples, the output is interpolated linearly, and so is the input (a
+    first-order hold) unless hold="zoh" says it was held from each sample to the next (a
+    zero-order hold). `fit` allows a non-zero initial state and an output offset (both on
+    by default); `estimate` and `Tracker` (the paper's algorithm) take the system at rest
+    at the first sample.
 
 How to use it
     import numpy as np
     import dc_drive
 
-    t = np.linspace(0.0, 10.0, 1001)
-    u = np.ones_like(t)                                # a unit step
-    y = dc_drive.simulate(t, u, k=10.0)
-    # the paper's estimate from k0, the global minimiser of the cost J, its local minima:
-    result = dc_drive.estimate(t, u, y, k0=5.0)
-    result.k, result.global_k[-1], result.minima()
-    # least squares over the whole record, globally:
-    dc_drive.fit(t, u, y).k
+    t = np.linspace(0.0, 100.0, 10001)
+    u = dc_drive.input_signal("prbs", t, period=1.0)   # held between switches: hold="zoh"
+    clean = dc_drive.simulate(t, u, k=10.0, hold="zoh")
+    y = dc_drive.with_noise(clean, 20.0)                # white noise, 20 dB SNR
+    # the whole record: unbiased under noise, with its standard error and warnings
+    result = dc_drive.fit(t, u, y, hold="zoh")
+    result.k, result.k_se, result.ci, result.fit_percent, result.warnings
+    # the paper's recursive estimate from k0, and the global minimiser of its cost J:
+    run = dc_drive.estimate(t, u, y, k0=5.0, hold="zoh")
+    run.k, run.global_k[-1], run.minima()
     # a live stream, one sample (or chunk) at a time:
-    tracker = dc_drive.Tracker(k0=5.0)
+    tracker = dc_drive.Tracker(k0=5.0, hold="zoh")
     tracker.update(t[0], u[0], y[0])
 
-or, from data in a CSV file with columns t, u, y:
+or, from data in CSV files with a header row and columns t, u, y (--columns to rename):
 
-    python dc_drive.py data.csv --k0 5.0
+    python dc_drive.py fit run1.csv run2.csv --hold zoh [--json]
+    python dc_drive.py estimate data.csv --k0 5.0
 
 API (the unknown is always called k here)
     theta(**known)                  Theta: rows a0..an, -b0..-bm; column j holds k^j terms
     transfer_function(k, **known)   (num, den), highest power of s first (scipy.signal)
     simulate(t, u, k, *, hold="linear", **known) -> y, exact for the stated hold
+    fit(t, u, y, *, method="iv", C="auto", k0=None, bounds=None, offset=True,
+        initial_state=True, hold="linear", beta=0.0, **known) -> Fit: k, k_se, ci,
+                                    fit_percent, residual_rms, warnings, minima, simulate()
+    moments(t, u, y, *, k=None, C=None, hold="linear", offset=True, initial_state=True,
+            **known) -> Moments: one record's statistics for a step of fit (they add)
     estimate(t, u, y, *, k0, beta=0.1, S0=1e-4, C=None, hold="linear", engine="moments",
              bounds=None, method="RK23", rtol=1e-6, atol=1e-9, max_step=inf,
              progress=None, **known) -> Estimate: k^ at every sample (and global_k)
-    fit(t, u, y, *, C=None, beta=0.0, bounds=None, hold="linear", **known) -> Fit
     Tracker(*, k0, beta=0.1, S0=1e-4, C=None, hold="linear", bounds=None, **known)
                                     .update(t, u, y) -> k^; .k, .global_k, .t
+    input_signal(kind, t, *, amplitude=1.0, period=None, seed=0)  step, prbs, square,
+                                    multisine
+    with_noise(y, snr_db, *, seed=0)  y plus white Gaussian noise at an SNR in dB
     filter_states(t, w, *, C=None, hold="linear")  s^i w / C(s) at the sample times
-    filter_polynomial(C)            the filter C(s) that `estimate` uses for a given C
+    filter_polynomial(C)            the filter C(s) for a given C (text such as "(1+s)^5")
     read_csv(path, columns)         named columns of a CSV file, as float arrays
+    EstimationWarning               the category of the warnings a user can act on
 
 The method: P. J. Gawthrop, R. W. Jones and S. A. MacKenzie, "Identification of
 partially-known systems", Automatica 28(4), 831-836, 1992, with the recursive
-polynomial-in-the-parameter least squares of Nihtila (1983); see `estimate`.
+polynomial-in-the-parameter least squares of Nihtila (1983); see `estimate`. `fit` adds
+refined instrumental variables (Young's SRIVC, for this structure); see `fit`.
 """
 
 import argparse
 import csv
 import json
 import math
+import re
 import sys
+import warnings
 from bisect import bisect_left, bisect_right
 from dataclasses import dataclass, field
 
 import numpy as np
+from numpy.polynomial import polynomial as P
 from scipy import integrate, linalg, optimize, signal
 
 MODEL = 'dc_drive'
 DESCRIPTION = 'voltage-driven DC motor with a flexible shaft and an unknown load inertia'
 INPUT = 'Se:v'
+INPUT_DESCRIPTION = 'armature voltage [V]'  # the model's words for it (None: none)
 OUTPUT = 'Df:vm'
+OUTPUT_DESCRIPTION = 'motor speed [rad/s]'
 UNKNOWN = 'k'  # called k in this module's API
 TRUE_VALUE = 10.0  # the model file's value of the unknown, for simulations
 TRANSFER_FUNCTION = (
@@ -244,23 +263,29 @@ def transfer_function(k: float, **known: float) -> tuple[np.ndarray, np.ndarray]
     return (num if num.size else np.zeros(1)), den
 
 
-def _responses(A, B, t: np.ndarray, w: np.ndarray, hold: str) -> np.ndarray:
-    """States (len(t), order) of x' = A x + B w from rest, w interpolated per the hold."""
+def _responses(A, B, t: np.ndarray, W: np.ndarray, holds: tuple[str, ...]) -> np.ndarray:
+    """States (len(W), len(t), order) of x' = A x + B w from rest, for each row w of W
+    interpolated per its hold: one propagation for all the signals."""
+    W = np.atleast_2d(W)
     steps = _Steps.of(t) if t.size > 1 else _Steps(np.ones(1), None)
+
+    def maps(values: np.ndarray):
+        found = {hold: _transitions(A, B, values, hold) for hold in set(holds)}
+        return found[holds[0]][0], np.stack([found[hold][1] for hold in holds], 1)
+
     if steps.index is None:
-        Phi, Gamma = _transitions(A, B, steps.values, hold)
-    states = np.empty((t.size, A.shape[0]))
-    states[0] = 0.0
-    ends = np.column_stack([w[:-1], w[1:]])[None]
+        Phi, Gamma = maps(steps.values)
+    states = np.empty((W.shape[0], t.size, A.shape[0]))
+    states[:, 0] = 0.0
+    ends = np.stack([W[:, :-1], W[:, 1:]], -1)
     chunk = BLOCK if steps.index is None else 2048
     for lo in range(0, t.size - 1, chunk):
         hi = min(t.size, lo + chunk + 1)
         index = None
         if steps.index is not None:  # the maps of this chunk's steps only
             which, index = np.unique(steps.index[lo : hi - 1], return_inverse=True)
-            Phi, Gamma = _transitions(A, B, steps.values[which], hold)
-        _propagate(Phi, Gamma[:, None], ends[:, lo : hi - 1], states[lo : lo + 1], index,
-                   out=states[None, lo:hi])  # fmt: skip
+            Phi, Gamma = maps(steps.values[which])
+        _propagate(Phi, Gamma, ends[:, lo : hi - 1], states[:, lo], index, out=states[:, lo:hi])
     return states
 
 
@@ -276,7 +301,7 @@ def simulate(t, u, k: float, *, hold: str = "linear", **known: float) -> np.ndar
     a, b, c, d = signal.tf2ss(*transfer_function(k, **known))
     if a.shape[0] == 0:  # a static gain
         return d[0, 0] * u
-    return _responses(a, b[:, 0], t, u, hold) @ c[0] + d[0, 0] * u
+    return _responses(a, b[:, 0], t, u, (hold,))[0] @ c[0] + d[0, 0] * u
 
 
 def filter_states(t, w, *, C=None, hold: str = "linear") -> np.ndarray:
@@ -289,7 +314,63 @@ def filter_states(t, w, *, C=None, hold: str = "linear") -> np.ndarray:
     t, w = _signals(("t", t), ("w", w), minimum=1)
     _choice("hold", hold, HOLDS)
     A, B = _realisation(filter_polynomial(C))
-    return _responses(A, B, t, w, hold)
+    return _responses(A, B, t, w, (hold,))[0]
+
+
+# Test signals: inputs for experiments, and output noise at a signal-to-noise ratio -----------------
+
+SIGNALS = ("step", "prbs", "square", "multisine")
+
+
+def input_signal(kind: str, t, *, amplitude: float = 1.0, period: float | None = None,
+                seed: int = 0) -> np.ndarray:  # fmt: skip
+    """An input signal at the times t, of peak `amplitude`:
+
+    "step": the amplitude from the first sample on; "prbs": a pseudo-random binary
+    sequence (+-amplitude, a maximum-length sequence from scipy, its state from the seed)
+    that may switch every `period` (default: 1/100 of the span), held between; "square":
+    a square wave of that period (default 1/10 of the span); "multisine": ten harmonics of
+    1/period (default: the span) with Schroeder's phases (a low crest factor), scaled to
+    the amplitude. Sampled at t, these are exact for hold="zoh" (prbs, square, step).
+    """
+    _choice("the signal kind", kind, SIGNALS)
+    t = _signals(("t", t), minimum=1)[0]
+    amplitude = _real("amplitude", amplitude)
+    span = float(t[-1] - t[0])
+    if kind == "step":
+        return np.full(t.size, amplitude)
+    default = {"prbs": span / 100, "square": span / 10, "multisine": span}[kind]
+    period = default if period is None else _positive("period", period)
+    if not period > 0:
+        raise ValueError(f"a {kind} needs a period > 0: give period= (the record spans {span:g})")
+    elapsed = (t - t[0]) / period
+    if kind == "square":
+        return amplitude * np.where(elapsed % 1.0 < 0.5, 1.0, -1.0)
+    if kind == "prbs":
+        count = int(math.floor(elapsed[-1] + 1e-9)) + 1
+        if count > 1 << 24:
+            raise ValueError(f"a PRBS switching every {period:g} over {span:g} is too long: use a longer period")
+        bits = max(4, math.ceil(math.log2(count + 1)))
+        state = np.random.default_rng(seed).integers(0, 2, bits)
+        state[0] |= not state.any()
+        sequence = signal.max_len_seq(bits, state=state, length=count)[0]
+        return amplitude * (2.0 * sequence[np.floor(elapsed + 1e-9).astype(int)] - 1.0)
+    harmonics = np.arange(1, 11)
+    phases = -np.pi * harmonics * (harmonics - 1) / harmonics.size  # Schroeder (1970)
+    wave = np.cos(2 * np.pi * np.outer(elapsed, harmonics) + phases).sum(1)
+    return amplitude * wave / np.abs(wave).max()
+
+
+def with_noise(y, snr_db: float, *, seed: int = 0) -> np.ndarray:
+    """y plus white Gaussian noise at a signal-to-noise ratio in dB (the variance of y over
+    the noise's), from a seeded generator: y + sqrt(var(y) / 10^(snr_db / 10)) N(0, 1)."""
+    y = _array("y", y)
+    snr_db = _real("snr_db", snr_db)
+    spread = float(np.var(y))
+    if spread == 0:
+        raise ValueError("y is constant: a signal-to-noise ratio gives it no noise level")
+    scale = math.sqrt(spread / 10 ** (snr_db / 10))
+    return y + scale * np.random.default_rng(seed).standard_normal(y.size)
 
 
 # The moments layer: the state-variable filter, exact over every sample interval -------------
@@ -307,29 +388,162 @@ TIME_RESOLUTION = 8 * np.finfo(float).eps  # relative precision of a time stamp
 BLOCK = 1 << 15  # samples per chunk of work: bounds the memory of long records
 
 
+MAX_FILTER_DEGREE = 24  # beyond, the roots of (1 + sT)^q are lost in rounding (spread eps^(1/q))
+_FILTER_TOKEN = re.compile(r"\s*(?:(\d+\.?\d*(?:[eE][-+]?\d+)?|\.\d+(?:[eE][-+]?\d+)?)|(\*\*|[-+*/^()])|(s))")
+
+
+def _filter_text(text: str) -> np.ndarray:
+    """A polynomial in s written as text, e.g. "(1+s)^5" or "1 + 2*s + s^2": coefficients in
+    ascending powers. Numbers, s, + - * /, ^ or ** with a whole exponent, parentheses; a
+    number may multiply without * ("2s"). Read by a small parser, never evaluated as code."""
+    tokens, at = [], 0
+    while at < len(text):
+        if text[at:].strip() == "":
+            break
+        match = _FILTER_TOKEN.match(text, at)
+        if not match:
+            raise ValueError(
+                f"C(s) = {text!r}: cannot read {text[at:].strip()[:12]!r} at character {at + 1} "
+                "(write a polynomial in s with numbers, + - * /, ^ and parentheses)"
+            )
+        number, operator, variable = match.groups()
+        tokens.append(("number", float(number)) if number else (operator or variable, None))
+        at = match.end()
+    tokens.append(("end", None))
+    position = 0
+
+    def peek() -> str:
+        return tokens[position][0]
+
+    def take(kind: str | None = None):
+        nonlocal position
+        token = tokens[position]
+        if kind is not None and token[0] != kind:
+            found = "the end" if token[0] == "end" else repr(token[0] if token[1] is None else token[1])
+            raise ValueError(f"C(s) = {text!r}: expected {kind!r}, found {found}")
+        position += 1
+        return token
+
+    def checked(c: np.ndarray, *parts: np.ndarray) -> np.ndarray:
+        """c, the product of parts, unless its coefficients left the floating-point range."""
+        if not np.isfinite(c).all():
+            raise ValueError(f"C(s) = {text!r}: a coefficient overflows the floating-point range")
+        if c.size < sum(part.size - 1 for part in parts) + 1 or (c[-1] == 0 and parts[0][-1]):
+            raise ValueError(
+                f"C(s) = {text!r}: its leading coefficient underflows to 0 (the numbers are too "
+                "small or too large for floating point: change the time unit)"
+            )
+        return c
+
+    def expression() -> np.ndarray:
+        sign = -1.0 if peek() == "-" else 1.0
+        if peek() in "+-":
+            take()
+        c = sign * term()
+        while peek() in ("+", "-"):
+            sign = 1.0 if take()[0] == "+" else -1.0
+            c = P.polyadd(c, sign * term())
+        return c
+
+    def term() -> np.ndarray:
+        c = power()
+        while peek() in ("*", "/", "number", "s", "("):
+            operator = take()[0] if peek() in ("*", "/") else "*"
+            right = power()
+            if operator == "/":
+                if right.size > 1 or right[0] == 0:
+                    raise ValueError(f"C(s) = {text!r}: divide only by a non-zero number")
+                with np.errstate(over="ignore", under="ignore"):
+                    c = checked(c / right[0], c)
+            else:
+                with np.errstate(over="ignore", under="ignore", invalid="ignore"):
+                    c = checked(P.polymul(c, right), c, right)
+        return c
+
+    def power() -> np.ndarray:
+        base = atom()
+        if peek() in ("^", "**"):
+            take()
+            exponent = take("number")[1]
+            if exponent != int(exponent) or exponent > MAX_FILTER_DEGREE:
+                raise ValueError(
+                    f"C(s) = {text!r}: the exponent {exponent:g} must be a whole number from 0 "
+                    f"to {MAX_FILTER_DEGREE}"
+                )
+            result = np.ones(1)
+            for _ in range(int(exponent)):
+                with np.errstate(over="ignore", under="ignore", invalid="ignore"):
+                    result = checked(P.polymul(result, base), result, base)
+            return result
+        return base
+
+    def atom() -> np.ndarray:
+        kind, value = take()
+        if kind == "number":
+            return np.array([value])
+        if kind == "s":
+            return np.array([0.0, 1.0])
+        if kind == "(":
+            c = expression()
+            take(")")
+            return c
+        if kind in ("+", "-"):
+            return (1.0 if kind == "+" else -1.0) * atom()
+        found = "the end" if kind == "end" else repr(kind)
+        raise ValueError(f"C(s) = {text!r}: expected a number, s or '(', found {found}")
+
+    c = expression()
+    if peek() != "end":
+        take("end")
+    return np.trim_zeros(c, "b") if c.any() else np.zeros(1)
+
+
 def filter_polynomial(C=None) -> np.ndarray:
     """The state-variable filter C(s), coefficients highest power first, checked.
 
-    C is None for (1 + s)^(n+1), a positive number T for (1 + sT)^(n+1), or the
-    coefficients of C(s). C(s) must be stable and of degree above n and m, so that the
-    filtered derivatives s^i y/C (i <= n) and s^j u/C (j <= m) need no differentiation.
+    C is None for (1 + s)^(n+1), a positive number T for (1 + sT)^(n+1), the coefficients
+    of C(s) (highest power first), or C(s) as text: "(1+s)^5", "1 + 2*s + s^2". C(s) must
+    be stable, of degree above n and m (so that the filtered derivatives s^i y/C, i <= n,
+    and s^j u/C, j <= m, need no differentiation) and at most MAX_FILTER_DEGREE.
     """
-    if C is None or np.ndim(C) == 0:
+    if isinstance(C, str) and C.strip() == "auto":
+        raise ValueError(
+            "C='auto' is chosen from the data by `fit` and `estimate`; give C(s) itself here "
+            "(a time constant T, coefficients, or text such as \"(1+s)^5\")"
+        )
+    if isinstance(C, str):
+        c = _filter_text(C)[::-1]
+        name = f"C(s) = {C!r}"
+    elif C is None or np.ndim(C) == 0:
         T = 1.0 if C is None else _positive("the filter time constant T", C)
-        c = np.ones(1)
-        for _ in range(n + 1):
-            c = np.convolve(c, [T, 1.0])
+        with np.errstate(over="ignore", under="ignore"):
+            c = np.array([math.comb(n + 1, i) for i in range(n + 2)]) * np.float64(T) ** np.arange(n + 1, -1, -1)
+        if not (np.isfinite(c).all() and (c > 0).all()):
+            raise ValueError(
+                f"the filter time constant T = {T:g} is out of range: T^{n + 1} "
+                f"{'overflows' if T > 1 else 'underflows to 0'} in floating point (measure "
+                "time in a unit where T is nearer 1)"
+            )
         return c
-    c = np.trim_zeros(_array("C", C), "f")
+    else:
+        c = np.trim_zeros(_array("C", C), "f")
+        name = "C(s)"
     if c.size - 1 <= max(n, m):
         raise ValueError(
-            f"C(s) has degree {c.size - 1}; it must exceed the degrees of A(s) and B(s) "
+            f"{name} has degree {c.size - 1}; it must exceed the degrees of A(s) and B(s) "
             f"(n = {n}, m = {m}), e.g. (1 + s)^{n + 1}"
         )
+    if c.size - 1 > MAX_FILTER_DEGREE:
+        raise ValueError(
+            f"{name} has degree {c.size - 1}, more than {MAX_FILTER_DEGREE}: a filter of degree "
+            f"n + 1 = {n + 1} is enough, e.g. (1 + s)^{n + 1}"
+        )
+    if not np.isfinite(c).all():
+        raise ValueError(f"{name}: every coefficient must be finite")
     unstable = [root for root in np.roots(c) if root.real >= 0]
     if unstable:
         raise ValueError(
-            f"C(s) is not stable: it has a root at s = {unstable[0]:.6g} "
+            f"{name} is not stable: it has a root at s = {unstable[0]:.6g} "
             "(every root must have a negative real part)"
         )
     return c
@@ -1057,6 +1271,8 @@ class Estimate:
     bounds: tuple[float, float]
     _shape: np.ndarray = field(repr=False)  # J_i / J_2, i = 2..2N (J scaled to J_2 = 1)
     _log_J2: np.ndarray = field(repr=False)  # log J_2: J_2 alone may underflow
+    warnings: tuple[str, ...] = ()  # what the user can act on (also issued as EstimationWarning)
+    filter: np.ndarray | None = field(default=None, repr=False)  # C(s), highest power first
 
     @property
     def J(self) -> np.ndarray:
@@ -1151,7 +1367,9 @@ def estimate(
     atol on every state and steps at most max_step: the paper's computation, for checks.
 
     C is the filter (see `filter_polynomial`): None for (1 + s)^(n+1), a time constant T
-    for (1 + sT)^(n+1), or coefficients, highest power first. global_k is the global
+    for (1 + sT)^(n+1), coefficients (highest power first), text such as "(1+s)^5", or
+    "auto": (1 + sT)^(n+1) with T from A(s, k0) and the sampling (as `fit` chooses it). A
+    filter faster than the sampling supports is a warning (`warnings`). global_k is the global
     minimiser of J(., t) within bounds=(lo, hi) (default the real line) at every sample.
     progress, if given, is called with the time reached as the run goes. If J_2 reaches
     zero along k^ (it has left the region where the cost is convex, and the ODE would
@@ -1169,7 +1387,10 @@ def estimate(
     _choice("engine", engine, ENGINES)
     _choice("method", method, METHODS)
     bounds = _bounds(bounds)
-    Theta, c = theta(**known), filter_polynomial(C)
+    Theta = theta(**known)
+    automatic = isinstance(C, str) and C.strip() == "auto"
+    c = _auto_filter(Theta, k0, [(t, u, y)]) if automatic else filter_polynomial(C)
+    found = [] if automatic else _filter_warnings(c, np.diff(t))
     informed = None
     if engine == "ode":
         times, khat, J, stop = _integrate(
@@ -1207,10 +1428,12 @@ def estimate(
                 f"; the data stopped informing the estimate at t = {informed:.6g} (after "
                 "that they are rounding noise, which leaves it unchanged)"
             )
+    for text in found:
+        warnings.warn(text, EstimationWarning, stacklevel=2)
     return Estimate(
         t=times, khat=khat, global_k=best, ok=stop is None, message=message,
         stopped_at=None if stop is None else float(stop[0]), informed_until=informed,
-        bounds=bounds, _shape=shape, _log_J2=log_J2,
+        bounds=bounds, _shape=shape, _log_J2=log_J2, warnings=tuple(found), filter=c,
     )  # fmt: skip
 
 
@@ -1335,88 +1558,761 @@ def _convexity_lost(time: float) -> str:
     )
 
 
-# The batch fit: the whole record's cost, minimised globally -----------------------------------
+# The batch fit's statistics: one record's moments, which add over records ------------------------
+#
+# Over a record, `fit` needs the moments (integrals of products) of filtered signals:
+#     X  = [y/F .. s^n y/F, u/F .. s^m u/F]           the regressors: X^T theta(k) is the error
+#     Z  = [x/F .. s^n x/F, u/F .. s^m u/F]           the instruments (method="iv"), x the model's
+#                                                     noise-free output at the current estimate
+#     Xi = [1/(sF), 1/F, s/F, .., s^(n-1)/F] (of a unit step from t0): what an offset (the first)
+#          and the initial state (the others) add to the filtered equation, for
+#          A(s, k) y - B(s, k) u = P(s) + c/s,  deg P < n,  c = a0 y_offset - b0 u_offset.
+# Each is s^i w/F of one signal w (y, u, x or the constant 1) interpolated between samples: a
+# state of the filter 1/F, or for i = deg F the signal itself less a combination of them. Over
+# a sampling interval the filter states and the signal's level and slope form one linear
+# system v' = G v, so the moments over the whole record are
+#     int v v^T = sum over intervals of int_0^h e^(G tau) v_l v_l^T e^(G^T tau) dtau,
+# one Gram matrix of the intervals' start vectors v_l and one matrix exponential per distinct
+# sampling interval (Van Loan, 1978): exact for the hold, vectorised over the samples. The
+# nuisances are projected out record by record (a Schur complement), so that what is left
+# adds over records and experiments.
+
+NUISANCE_NAMES = ("offset", "initial state")
+
+
+def _derivatives(c: np.ndarray, needs: tuple[int, ...]) -> np.ndarray:
+    """S with S @ v = the filtered derivatives s^i w_j / F, i = 0..needs[j], of each signal j,
+    where v stacks each signal's [z (deg F states); level; slope] (c: F, highest power first).
+    Above deg F - 1, s^q w/F = (w - c_0 z_0 - ... - c_(q-1) z_(q-1)) / c_q."""
+    order = c.size - 1
+    width = order + 2
+    rows = []
+    for j, need in enumerate(needs):
+        for i in range(need + 1):
+            row = np.zeros(width * len(needs))
+            if i < order:
+                row[j * width + i] = 1.0
+            else:  # i == order: the direct feedthrough of s^q / F
+                row[j * width : j * width + order] = -c[:0:-1] / c[0]
+                row[j * width + order] = 1.0 / c[0]
+            rows.append(row)
+    return np.array(rows)
+
+
+def _filtered_moments(c, t, W, holds, needs, beta: float = 0.0) -> np.ndarray:
+    """int e^(-beta (t_end - tau)) D D^T dtau over the record, D = the filtered derivatives
+    of the signals W (one per row, each interpolated per its hold; see `_derivatives`).
+    Exact for the holds (see above): the weight is e^(-beta (t_end - t_l)) at an interval's
+    start, times e^(beta tau) within it, which shifts G by beta/2."""
+    order = c.size - 1
+    A, B = _realisation(c)
+    states = _responses(A, B, t, W, holds)
+    steps = _Steps.of(t)
+    h = steps.at(steps.values) if steps.index is not None else np.full(t.size - 1, steps.values[0])
+    width = order + 2
+    V = np.empty((t.size - 1, width * len(holds)))  # each interval's start: [z; w; slope]
+    for j, (w, hold, z) in enumerate(zip(W, holds, states, strict=True)):
+        V[:, j * width : j * width + order] = z[:-1]
+        V[:, j * width + order] = w[:-1]
+        V[:, j * width + order + 1] = np.diff(w) / h if hold == "linear" else 0.0
+    if beta:
+        V *= np.exp(-0.5 * beta * (t[-1] - t[:-1]))[:, None]
+    G = linalg.block_diag(*[_drift(A, B)] * len(holds))
+    d = G.shape[0]
+    G += 0.5 * beta * np.eye(d)
+    block = np.zeros((steps.values.size, 2 * d, 2 * d))
+    block[:, :d, :d] = -G
+    block[:, d:, d:] = G.T
+    if steps.index is None:
+        block[0, :d, d:] = V.T @ V
+    else:  # one Gram matrix per distinct step
+        for lo in range(0, V.shape[0], 4096):
+            part = V[lo : lo + 4096]
+            np.add.at(block[:, :d, d:], steps.index[lo : lo + 4096], part[:, :, None] * part[:, None, :])
+    E = linalg.expm(block * steps.values[:, None, None])
+    M = (np.swapaxes(E[:, d:, d:], 1, 2) @ E[:, :d, d:]).sum(0)
+    S = _derivatives(c, needs)
+    M = S @ M @ S.T
+    return 0.5 * (M + M.T)
+
+
+def _project_out(M: np.ndarray, keep: int) -> np.ndarray:
+    """The moments of the first `keep` signals with the rest (nuisances) projected out."""
+    if M.shape[0] == keep:
+        return M
+    top, side, bottom = M[:keep, :keep], M[:keep, keep:], M[keep:, keep:]
+    return top - side @ np.linalg.lstsq(bottom, side.T, rcond=None)[0]
+
+
+@dataclass(frozen=True)
+class Moments:
+    """One record's sufficient statistics for one step of `fit`, its nuisances (offset,
+    initial state) projected out: the moments of several records add (`+`, `sum`).
+
+    In the layout of Theta's rows (a0..an, -b0..-bm): XX = int X X^T, so that the
+    least-squares cost is J(k) = K^T Theta^T XX Theta K / 2; for an instrumental-variable
+    step (k given: the estimate that made the prefilter and the instruments) also
+    ZX = int Z X^T and ZZ = int Z Z^T. `samples` counts the samples, `nuisances` the
+    nuisance parameters projected out.
+    """
+
+    XX: np.ndarray
+    ZX: np.ndarray | None
+    ZZ: np.ndarray | None
+    k: float | None
+    samples: int
+    nuisances: int
+
+    def __add__(self, other: "Moments") -> "Moments":
+        if other == 0:  # sum() starts from 0
+            return self
+        if not isinstance(other, Moments) or (self.k is None) != (other.k is None) or (
+            self.k is not None and self.k != other.k
+        ):
+            raise ValueError("only the moments of one kind of step (the same k) add")
+        both = (lambda a, b: None if a is None else a + b)
+        return Moments(self.XX + other.XX, both(self.ZX, other.ZX), both(self.ZZ, other.ZZ),
+                       self.k, self.samples + other.samples, self.nuisances + other.nuisances)  # fmt: skip
+
+    __radd__ = __add__
+
+    def criterion(self, Theta: np.ndarray) -> np.ndarray:
+        """The polynomial in k (ascending coefficients) that the step minimises.
+
+        Least squares: J(k) = |X^T Theta K(k)|^2 / 2 integrated. Instrumental variables: the
+        weighted norm of the instruments' correlation with the error,
+            V(k) = (ZX Theta K)^T Q (Q^T ZZ Q)^-1 Q^T (ZX Theta K) / 2,
+        with the optimal weight for a white filtered error (ZZ^-1: two-stage least
+        squares); Q spans the directions orthogonal to theta(k^), which drops the one
+        combination of the instruments that vanishes identically (theta(k^)^T Z = 0, as x
+        is the model's output at k^). Both are polynomials of degree 2N, >= 0.
+        """
+        if self.k is None:
+            H = self.XX
+        else:
+            Q = linalg.null_space((Theta @ self.k ** np.arange(N + 1))[None, :])
+            R = Q.T @ self.ZX
+            H = R.T @ np.linalg.lstsq(Q.T @ self.ZZ @ Q, R, rcond=None)[0]
+        return _half_square(Theta, H)
+
+
+def _half_square(Theta: np.ndarray, H: np.ndarray) -> np.ndarray:
+    """Ascending coefficients of K(k)^T Theta^T H Theta K(k) / 2, K(k) = [1, k, .., k^N]."""
+    G = Theta.T @ (0.5 * (H + H.T)) @ Theta
+    coefficients = np.zeros(2 * N + 1)
+    for a in range(N + 1):
+        coefficients[a : a + N + 1] += 0.5 * G[a]
+    return coefficients
+
+
+def _nuisance_needs(offset: bool, initial_state: bool) -> tuple[int, int]:
+    """The range (first, last) of s^i 1/F (a unit step's filtered derivatives) that are
+    nuisance regressors: i = 0 is the offset's 1/(sF), i = 1..n the initial state's."""
+    return (0 if offset else 1), (n if initial_state else 0)
+
+
+def _prefilter(Theta: np.ndarray, k: float, C) -> np.ndarray:
+    """F(s) for an instrumental-variable step at k: A(s, k), its roots in the right half
+    plane mirrored into the left (any stable prefilter keeps the estimate consistent),
+    made monic, times C(s) when one is given (highest power first)."""
+    a = np.trim_zeros((Theta @ k ** np.arange(N + 1))[n::-1], "f")
+    if a.size < 2:
+        raise ValueError(f"A(s, k) has degree {a.size - 1} at k = {k:g}: no prefilter")
+    roots = np.roots(a)
+    if (roots.real >= 0).any():
+        slowest = np.abs(roots).max() or 1.0
+        roots = np.where(roots.real >= 0, -np.maximum(np.abs(roots.real), 1e-6 * slowest) + 1j * roots.imag, roots)
+        a = np.real(np.poly(roots))
+    f = a / a[0]
+    return f if C is None else np.convolve(f, C / C[0])
+
+
+def _record_moments(Theta, t, u, y, *, k, c, hold, offset, initial_state, beta, known) -> Moments:
+    """`moments` for checked arrays and a resolved filter: c is C(s) for least squares
+    (k None), else the extra factor of the prefilter (None for none)."""
+    first, last = _nuisance_needs(offset, initial_state)
+    signals, holds, needs = [y, u], ("linear", hold), (n, m)
+    if k is not None:
+        x = simulate(t, u, k, hold=hold, **known) if _stable(Theta, k) else _stabilised_output(Theta, t, u, k, hold)
+        signals.append(x)
+        holds, needs = holds + ("linear",), needs + (n,)
+        c = _prefilter(Theta, k, c)
+    if last >= first:
+        signals.append(np.ones_like(t))
+        holds, needs = holds + ("zoh",), needs + (last,)
+    M = _filtered_moments(c, t, np.array(signals), holds, needs, beta)
+    if last >= first:  # drop s^i 1/F for i < first (no offset), then project the rest out
+        keep = np.r_[np.arange(M.shape[0] - last - 1), M.shape[0] - last - 1 + np.arange(first, last + 1)]
+        M = M[np.ix_(keep, keep)]
+    p = n + m + 2
+    M = _project_out(M, M.shape[0] - max(last - first + 1, 0))
+    nuisances = max(last - first + 1, 0)
+    if k is None:
+        return Moments(M, None, None, None, t.size, nuisances)
+    Z = np.r_[p + np.arange(n + 1), n + 1 + np.arange(m + 1)]
+    X = np.arange(p)
+    return Moments(M[np.ix_(X, X)], M[np.ix_(Z, X)], M[np.ix_(Z, Z)], k, t.size, nuisances)
+
+
+def _stable(Theta: np.ndarray, k: float) -> bool:
+    a = np.trim_zeros((Theta @ k ** np.arange(N + 1))[n::-1], "f")
+    return a.size > 1 and bool((np.roots(a).real < 0).all())
+
+
+def _stabilised_output(Theta, t, u, k, hold) -> np.ndarray:
+    """The output of B(s, k)/A~(s), A~ the prefilter's A(s, k) with its unstable roots
+    mirrored: instruments that stay bounded (an unstable model's output would not)."""
+    f = _prefilter(Theta, k, None)
+    a = np.trim_zeros((Theta @ k ** np.arange(N + 1))[n::-1], "f")
+    b = np.trim_zeros(-(Theta @ k ** np.arange(N + 1))[:n:-1], "f")
+    A_, B_, C_, D_ = signal.tf2ss(b / a[0] if b.size else np.zeros(1), f)
+    return _responses(A_, B_[:, 0], t, u, (hold,))[0] @ C_[0] + D_[0, 0] * u
+
+
+def moments(t, u, y, *, k=None, C=None, hold: str = "linear", offset: bool = True,
+            initial_state: bool = True, **known) -> Moments:  # fmt: skip
+    """One record's sufficient statistics for a step of `fit` (they add over records).
+
+    k None: the least-squares moments with the filter C (see `filter_polynomial`). k given:
+    an instrumental-variable step's, with the prefilter 1/A(s, k) (times 1/C(s) if C is
+    given) and instruments from the model's noise-free output at k. offset and
+    initial_state add the nuisance regressors of an output offset and of a non-zero
+    initial state, projected out of the result.
+    """
+    t, u, y = _signals(("t", t), ("u", u), ("y", y), minimum=2)
+    _choice("hold", hold, HOLDS)
+    Theta = theta(**known)
+    if k is None:
+        c = filter_polynomial(C)
+    else:
+        k = _real("k", k)
+        c = None if C is None else filter_polynomial(C)
+    return _record_moments(Theta, t, u, y, k=k, c=c, hold=hold, offset=bool(offset),
+                           initial_state=bool(initial_state), beta=0.0, known=known)  # fmt: skip
+
+
+# What a fit is worth: the fitted output, residuals and the uncertainty of k ------------------------
+#
+# At the estimate, the model's output with the record's nuisances is
+#     y^ = G(s, k^) u + (P(s) + c/s) / A(s, k^)      (initial state P, offset c),
+# the nuisances fitted to the samples by least squares. Its residuals give the noise variance
+# and the fit; its sensitivity psi = dy^/dk = (B' u - A' y^)/A (primes: d/dk) gives the
+# uncertainty. At convergence the instrumental-variable estimate solves the output-error
+# normal equation (its prefilter 1/A(s, k^) turns the error into y - y^, its instruments
+# into psi), so its variance is that of output-error least squares, sigma^2 / |psi|^2 with
+# the nuisances projected out of psi. The least-squares estimate is not efficient: its
+# equation error is the output noise coloured by A(s, k)/C(s), and its variance follows from
+# how each noise sample moves J' (the filters' adjoints, below).
+
+WHITENESS_LAGS = 20  # residual autocorrelations tested
+WHITENESS_LEVEL = 3.0  # chi-square(WHITENESS_LAGS) quantile scale: Q > mean + LEVEL std
+CLEAN = 1e-5  # residuals below this fraction of the output's spread are noise-free data
+
+
+@dataclass(frozen=True)
+class _Record:
+    """One record's part in the fit's validation (the sums add over records)."""
+
+    fitted: np.ndarray  # y^ at the samples
+    residuals: np.ndarray  # y - y^
+    offset: float  # the output at rest with zero input: c / a0 (0 without offsets)
+    information: float  # |psi|^2, nuisances projected out (weighted)
+    spread: float  # sum of the squared weighted psi (the variance's numerator)
+    free_information: float  # |psi|^2 without projecting the nuisances out
+    influence: float  # least squares: sum of (dJ'/de_i)^2, per unit noise variance
+    nuisances: int
+    deviations: float  # sum (y - mean y)^2
+    whiteness: float  # Ljung-Box statistic of the residuals
+
+
+def _nuisance_columns(f: np.ndarray, t: np.ndarray, first: int, last: int) -> np.ndarray:
+    """s^i (1/s) / F at the samples, i = first..last: the output's offset (i = 0) and
+    initial-state (i >= 1) responses when F is A(s, k) made monic."""
+    return _filter_derivatives(f, t, np.ones((1, t.size)), ("zoh",), (last,))[0][:, first:]
+
+
+def _filter_derivatives(f: np.ndarray, t: np.ndarray, W, holds, needs) -> list[np.ndarray]:
+    """s^i w / F at the samples, i = 0..need, for each signal w of W (columns per signal):
+    filter states, and for i = deg F the signal itself less a combination of them."""
+    A, B = _realisation(f)
+    order = A.shape[0]
+    states = _responses(A, B, t, np.atleast_2d(W), holds)
+    out = []
+    for w, z, need in zip(np.atleast_2d(W), states, needs, strict=True):
+        S = _derivatives(f, (need,))
+        out.append(z @ S[:, :order].T + np.outer(w, S[:, order]))
+    return out
+
+
+def _whiteness(r: np.ndarray) -> float:
+    """Ljung-Box Q of the residuals over WHITENESS_LAGS lags (about chi-square when white)."""
+    r = r - r.mean()
+    lags = min(WHITENESS_LAGS, r.size // 4)
+    power = r @ r
+    if lags < 1 or power == 0:
+        return 0.0
+    rho = np.array([r[:-lag] @ r[lag:] for lag in range(1, lags + 1)]) / power
+    return float(r.size * (r.size + 2) * np.sum(rho**2 / (r.size - np.arange(1, lags + 1))))
+
+
+def _validate(Theta, record, k, *, method, c, hold, offset, initial_state, weights, known) -> _Record:
+    """The record's fitted output, residuals and its sums for the uncertainty of k."""
+    t, u, y = record
+    first, last = _nuisance_needs(offset, initial_state)
+    f = _prefilter(Theta, k, None)
+    x = simulate(t, u, k, hold=hold, **known) if _stable(Theta, k) else _stabilised_output(Theta, t, u, k, hold)
+    w = np.ones(t.size) if weights is None else weights
+    Xi = _nuisance_columns(f, t, first, last) if last >= first else np.zeros((t.size, 0))
+    root = np.sqrt(w)[:, None]
+    nu = np.linalg.lstsq(root * Xi, root[:, 0] * (y - x), rcond=None)[0]
+    fitted = x + Xi @ nu
+    residuals = y - fitted
+    powers = k ** np.arange(N + 1)
+    slope = Theta @ (np.arange(N + 1) * np.r_[0.0, powers[:-1]])  # dtheta/dk
+    a = (Theta @ powers)[: n + 1]
+    Dy, Du = _filter_derivatives(f, t, [fitted, u], ("linear", hold), (n, m))
+    scale = a[np.flatnonzero(a)[-1]] if a.any() else 1.0  # F = A / a_n
+    psi = -(Dy @ slope[: n + 1] + Du @ slope[n + 1 :]) / scale
+    projected = psi - Xi @ np.linalg.lstsq(root * Xi, root[:, 0] * psi, rcond=None)[0]
+    offset_value = 0.0
+    if first == 0 and a[0] != 0:  # c = nu[0] * a_n in A y - B u = ... + c/s (Xi scaled by a_n)
+        offset_value = float(nu[0] * scale / a[0])
+    influence = 0.0
+    if method == "ls":
+        influence = _ls_influence(Theta, t, u, y, k, c, hold, first, last, w)
+    return _Record(
+        fitted=fitted, residuals=residuals, offset=offset_value,
+        information=float(projected @ (w * projected)), spread=float(projected @ (w**2 * projected)),
+        free_information=float(psi @ (w * psi)), influence=influence, nuisances=Xi.shape[1],
+        deviations=float(np.sum((y - y.mean()) ** 2)), whiteness=_whiteness(residuals),
+    )  # fmt: skip
+
+
+def _ls_influence(Theta, t, u, y, k, c, hold, first, last, w) -> float:
+    """sum_i (dJ'(k^)/de_i)^2: how much the noise sample e_i added to y moves the slope J' of
+    the least-squares cost at k^, summed in square (J'' and sigma^2 give the variance).
+
+    J' = int phi epsilon with epsilon = X^T theta(k^) and phi = X^T theta'(k^), the nuisances
+    projected out; a noise sample moves epsilon by A(s, k^)/C(s) of it and phi by
+    A'(s, k^)/C(s), so J' moves by the adjoints of those filters applied to phi and epsilon
+    (time reversed), each sample weighing its share of the interval around it.
+    """
+    powers = k ** np.arange(N + 1)
+    theta_k = Theta @ powers
+    slope = Theta @ (np.arange(N + 1) * np.r_[0.0, powers[:-1]])
+    Dy, Du, Dn = _filter_derivatives(c, t, [y, u, np.ones_like(t)], ("linear", hold, "zoh"), (n, m, n))
+    error = Dy @ theta_k[: n + 1] + Du @ theta_k[n + 1 :]
+    phi = Dy @ slope[: n + 1] + Du @ slope[n + 1 :]
+    if last >= first:
+        Xi = Dn[:, first : last + 1]
+        root = np.sqrt(w)[:, None]
+        error = error - Xi @ np.linalg.lstsq(root * Xi, root[:, 0] * error, rcond=None)[0]
+        phi = phi - Xi @ np.linalg.lstsq(root * Xi, root[:, 0] * phi, rcond=None)[0]
+    back = t[-1] + t[0] - t[::-1]  # the adjoint of a causal filter runs backwards in time
+    Rphi, Rerror = _filter_derivatives(c, back, [(w * phi)[::-1], (w * error)[::-1]], ("linear", "linear"), (n, n))
+    g = (Rphi @ theta_k[: n + 1] + Rerror @ slope[: n + 1])[::-1]
+    h = np.diff(t)
+    share = 0.5 * (np.r_[h, 0.0] + np.r_[0.0, h])
+    return float(np.sum((g * share) ** 2))
+
+
+# The batch fit: whole records, unbiased under output noise, with the uncertainty of k -------------
+
+FIT_METHODS = ("iv", "ls")  # refined instrumental variables (default), least squares
+MAX_ITERATIONS = 50
+CONVERGED = 1e-9  # the instrumental-variable steps stop when k^ moves less, relative
+SAMPLES_PER_FILTER = 10.0  # a filter time constant below this many sampling intervals is too fast
+MARGIN = 3.84  # chi-square(1) at 95 %: a residual sum of squares within MARGIN sigma^2 is as good
+POORLY_DETERMINED = 0.25  # k_se / |k| above this: warn
+Z95 = 1.959963984540054  # the normal distribution's 97.5 % point
+
+
+class EstimationWarning(UserWarning):
+    """Something about a fit or an estimate that a user can act on; the message says what."""
 
 
 @dataclass(frozen=True)
 class Fit:
-    """The least-squares fit of k to a whole record: no starting value, no prior.
+    """k fitted to one or several whole records, with its uncertainty and its fit.
 
-    k: the global minimiser of J within `bounds` (NaN when J has none: then ok is False and
-    `message` says why); minima: every local minimum of J within the bounds, ascending;
-    coefficients: J(k) = sum_p coefficients[p] k^p, where
-        J(k) = 1/2 int_t0^T e^(-beta (T - tau)) g(tau, k)^2 dtau
-    with g(t, k) = X(t)^T Theta K(k) as in `estimate`; informed_until: as in `Estimate`.
+    k: the estimate (NaN when there is none: then ok is False and `message` says why);
+    k_se: its standard error, from the estimator's asymptotic variance with the noise
+    variance estimated from the residuals; ci: the 95 % interval k +- 1.96 k_se;
+    method: "iv" or "ls"; iterations: instrumental-variable steps taken (0 for "ls");
+    minima: the local minima of the last step's criterion within the bounds, ascending;
+    coefficients: that criterion as a polynomial in k (ascending powers: `cost`);
+    warnings: what the user can act on (also issued as EstimationWarning);
+    fit_percent: 100 (1 - |y - y^| / |y - mean y|), the model's simulated output y^ against
+    the measured one over all records; residual_rms: the RMS of y - y^; noise_std: the
+    noise's standard deviation estimated from them; offsets: per record, the output at rest
+    with zero input (an operating point; 0 without offset); filter: C(s) of the
+    least-squares fit (highest power first); fitted, residuals: y^ and y - y^ per record.
     """
 
     k: float
+    k_se: float
+    ci: tuple[float, float]
+    method: str
+    iterations: int
     minima: np.ndarray
     coefficients: np.ndarray
     bounds: tuple[float, float]
     ok: bool
     message: str
-    informed_until: float | None
+    warnings: tuple[str, ...]
+    fit_percent: float
+    residual_rms: float
+    noise_std: float
+    offsets: tuple[float, ...]
+    filter: np.ndarray
+    fitted: tuple[np.ndarray, ...] = field(repr=False)
+    residuals: tuple[np.ndarray, ...] = field(repr=False)
+    hold: str = field(default="linear", repr=False)
+    known: dict = field(default_factory=dict, repr=False)
 
     def cost(self, k):
-        """J(k) for scalar or array k."""
+        """The last step's criterion at k (scalar or array): J for "ls", V for "iv"."""
         return _value(self.coefficients, np.asarray(k, dtype=float))
 
+    def simulate(self, t, u, record: int = 0) -> np.ndarray:
+        """The fitted model's output for input u at times t, from rest at the operating
+        point of record `record` (its offset added)."""
+        if not self.ok:
+            raise ValueError(f"no fitted model to simulate: {self.message}")
+        offset = self.offsets[_index_of("record", record, len(self.offsets))]
+        return simulate(t, u, self.k, hold=self.hold, **self.known) + offset
 
-def fit(t, u, y, *, C=None, beta: float = 0.0, bounds=None, hold: str = "linear", **known) -> Fit:
-    """Fit k to samples of input u and output y at times t: the global minimiser of J.
 
-    J(k) is the cost of `estimate` at the last sample, without its prior: computed exactly
-    for the hold from the filter's moments, as a polynomial in k, and minimised over the
-    real line or within bounds=(lo, hi). beta >= 0 weighs recent data more (0: all
-    alike). Intervals whose data are rounding noise add nothing (see `estimate`).
+def _index_of(name: str, value, count: int) -> int:
+    if not isinstance(value, int | np.integer) or not -count <= value < count:
+        raise ValueError(f"{name} must be a whole number from 0 to {count - 1}, not {value!r}")
+    return int(value) % count
+
+
+def _records(t, u, y) -> list[tuple[np.ndarray, np.ndarray, np.ndarray]]:
+    """One record (arrays t, u, y) or several (lists of arrays), each checked."""
+    several = isinstance(t, list | tuple) and len(t) > 0 and np.ndim(t[0]) > 0
+    if not several:
+        return [tuple(_signals(("t", t), ("u", u), ("y", y), minimum=2))]
+    lists = [("t", t), ("u", u), ("y", y)]
+    for name, value in lists:
+        if not isinstance(value, list | tuple) or len(value) != len(t):
+            raise ValueError(f"{name} must be a list of {len(t)} arrays, one per record, like t")
+    return [
+        tuple(_signals(*((f"{name}[{i}]", value[i]) for name, value in lists), minimum=2))
+        for i in range(len(t))
+    ]
+
+
+def _auto_filter(Theta: np.ndarray, k, records) -> np.ndarray:
+    """(1 + sT)^(n+1) with T the geometric mean of the time constants of A(s, k) (none
+    known: of the record's span and sampling interval), within [10 dt, span / 10]."""
+    step = float(np.median(np.concatenate([np.diff(t) for t, _, _ in records])))
+    span = min(float(t[-1] - t[0]) for t, _, _ in records)
+    lo, hi = SAMPLES_PER_FILTER * step, span / SAMPLES_PER_FILTER
+    T = math.sqrt(lo * hi)
+    if k is not None and np.isfinite(k):
+        roots = np.roots(np.trim_zeros((Theta @ k ** np.arange(N + 1))[n::-1], "f"))
+        sizes = np.abs(roots[roots != 0])
+        if sizes.size and np.isfinite(sizes).all():
+            T = float(np.exp(-np.mean(np.log(sizes))))
+    T = min(max(T, lo), hi) if lo <= hi else math.sqrt(lo * hi)
+    try:
+        return filter_polynomial(T)
+    except ValueError:
+        raise ValueError(
+            f"C='auto': the record spans {span:.3g} time units with samples {step:.3g} apart, "
+            f"which puts the filter's time constant at {T:.3g}, out of floating-point range: "
+            "are the times in the model's unit (seconds)?"
+        ) from None
+
+
+def _weights(t: np.ndarray, beta: float) -> np.ndarray | None:
+    """Forgetting: each sample weighted by e^(-beta (t_end - t))."""
+    return None if beta == 0 else np.exp(-beta * (t[-1] - t))
+
+
+def _step(Theta, records, k, c, bounds, beta, settings) -> tuple[float, np.ndarray, Moments]:
+    """One step of the fit: the records' moments (least squares for k None, else an
+    instrumental-variable step at k), summed, and the global minimiser of the criterion."""
+    total = sum(
+        _record_moments(Theta, *record, k=k, c=c, beta=beta, **settings)
+        for record in records
+    )  # fmt: skip
+    coefficients = total.criterion(Theta)
+    return float(_global_minimisers(coefficients, 0.0, bounds)[0]), coefficients, total
+
+
+def fit(t, u, y, *, method: str = "iv", C="auto", k0=None, bounds=None, offset: bool = True,
+        initial_state: bool = True, hold: str = "linear", beta: float = 0.0, **known) -> Fit:  # fmt: skip
+    """Fit k to whole records of input u and output y at times t: no prior, nothing to tune.
+
+    t, u, y are arrays (one record) or lists of arrays (several experiments: their moments
+    add; each has its own offset and initial state). method="iv" (the default) is a refined
+    instrumental-variable estimator (SRIVC, Young): from the least-squares estimate (or k0),
+    each step filters u and y with 1/A(s, k^), takes as instruments the model's noise-free
+    output at k^ filtered alike, and minimises the instrumental-variable criterion (a
+    polynomial in k) globally within bounds, until k^ moves less than CONVERGED: unbiased
+    under output noise, with the variance of output-error least squares. method="ls" is the
+    least-squares fit of the paper's cost J (biased by output noise).
+
+    C: the least-squares filter (see `filter_polynomial`); "auto" chooses (1 + sT)^(n+1)
+    from A(s, k) at k0 (else the model file's value, else the data) and the sampling, and
+    for "ls" refines it once at the estimate; for "iv" an explicit C also multiplies the
+    prefilter. offset: estimate a constant offset (an operating point of u and y);
+    initial_state: allow the system not to be at rest at the first sample. Both are
+    nuisance parameters, projected out. beta >= 0 weighs recent data more (0: all alike).
+    Every problem a user can act on is in `warnings` and issued as an EstimationWarning.
     """
-    t, u, y = _signals(("t", t), ("u", u), ("y", y), minimum=2)
-    beta = _positive("beta", beta, allow_zero=True)
+    records = _records(t, u, y)
+    _choice("method", method, FIT_METHODS)
     _choice("hold", hold, HOLDS)
+    beta = _positive("beta", beta, allow_zero=True)
     bounds = _bounds(bounds)
-    setup = _Setup.of(theta(**known), filter_polynomial(C), beta, hold)
-    steps = _Steps.of(t)
-    chunk = BLOCK if steps.index is None else 2048
-    if steps.index is None:
-        maps = setup.maps(steps.values)
-    coefficients = np.zeros(2 * N + 1)
-    z = np.zeros(2 * setup.A.shape[0])
-    informed = t[0]
-    for lo in range(0, t.size - 1, chunk):
-        hi = min(t.size, lo + chunk + 1)  # samples lo..hi-1, intervals lo..hi-2
-        index = None
-        if steps.index is not None:  # the maps of this chunk's steps only
-            which, index = np.unique(steps.index[lo : hi - 1], return_inverse=True)
-            maps = setup.maps(steps.values[which])
-        rows = _moments_input(z, y[lo:hi], u[lo:hi], maps, index)
-        z = rows[-1, : z.size]
-        noise = setup.noise(rows[:, : z.size])
-        quiet = setup.quiet(noise, steps.values if index is None else np.diff(t[lo:hi]))
-        V = rows[:-1]
-        if beta == 0 and not quiet.any():
-            weight = None
-        else:
-            weight = np.where(quiet, 0.0, np.exp(-beta * (t[-1] - t[lo + 1 : hi])))
-        if index is None:  # one weighted Gram matrix of the intervals' vectors
-            root = V if weight is None else np.sqrt(weight)[:, None] * V
-            coefficients += np.einsum("pde,de->p", maps[2][0], root.T @ root)
-        else:
-            costs = _interval_costs(V, maps[2], index)
-            coefficients += costs.sum(0) if weight is None else weight @ costs
-        if not quiet.all():
-            informed = t[lo + 1 + np.flatnonzero(~quiet)[-1]]
-    coefficients[0], coefficients[-1] = max(coefficients[0], 0.0), max(coefficients[-1], 0.0)
-    best = float(_global_minimisers(coefficients, 0.0, bounds)[0])
+    k0 = None if k0 is None else _real("k0", k0)
+    offset, initial_state = bool(offset), bool(initial_state)
+    Theta = theta(**known)
+    automatic = isinstance(C, str) and C.strip() == "auto"
+    c = None if automatic else filter_polynomial(C)
+    first, last = _nuisance_needs(offset, initial_state)
+    nuisances = max(last - first + 1, 0)
+    for i, (times, _, _) in enumerate(records):
+        if times.size < nuisances + 2:
+            where = f"record {i} has" if len(records) > 1 else "the record has"
+            raise ValueError(
+                f"{where} {times.size} samples: too few to determine k and {nuisances} nuisance "
+                f"parameter(s) (offset, initial state); need at least {nuisances + 2}"
+            )
+    settings = dict(hold=hold, offset=offset, initial_state=initial_state, known=known)
+    notes: list[str] = []
+    if automatic:
+        c = _auto_filter(Theta, k0 if k0 is not None else TRUE_VALUE, records)
+    with np.errstate(all="ignore"):
+        k, coefficients, total = _step(Theta, records, None, c, bounds, beta, settings)
+        if automatic and method == "ls" and np.isfinite(k):
+            c = _auto_filter(Theta, k, records)
+            k, coefficients, total = _step(Theta, records, None, c, bounds, beta, settings)
+        iterations = 0
+        if method == "iv":
+            extra = None if automatic else c
+            k = k0 if k0 is not None else k
+            previous = math.inf
+            while np.isfinite(k) and iterations < MAX_ITERATIONS:
+                new, coefficients, total = _step(Theta, records, k, extra, bounds, beta, settings)
+                iterations += 1
+                step, k = abs(new - k), new
+                if step <= CONVERGED * abs(k) or step == previous == 0:
+                    break
+                previous = step
+            else:
+                if np.isfinite(k):
+                    notes.append(
+                        f"the instrumental-variable steps did not settle in {MAX_ITERATIONS} "
+                        f"iterations (the last moved k by {step:.3g}): the estimate may be poor"
+                    )
+    return _finish(Theta, records, k, coefficients, method=method, c=c, iterations=iterations,
+                   bounds=bounds, beta=beta, notes=notes, automatic=automatic, settings=settings,
+                   last_moments=total)  # fmt: skip
+
+
+# The fit's verdict: its uncertainty, its fit and the warnings a user can act on ------------------
+
+EXCITATION = 1e-10  # the instruments' moments singular to this, relative: the input is too poor
+
+
+def _fastest(c: np.ndarray) -> float:
+    """The fastest time constant of the filter C(s)."""
+    return 1.0 / float(np.abs(np.roots(c)).max())
+
+
+def _filter_warnings(c: np.ndarray, steps: np.ndarray) -> list[str]:
+    """A filter faster than the sampling supports: its derivatives amplify the error of
+    interpolating the samples linearly (the DC drive, noise-free, T = 0.02 at dt = 0.01:
+    0.011 for 10)."""
+    step = float(np.median(steps))
+    T = _fastest(c)
+    if T >= SAMPLES_PER_FILTER * step:
+        return []
+    return [
+        f"the filter is too fast for the sampling: its fastest time constant {T:.3g} is "
+        f"under {SAMPLES_PER_FILTER:g} sampling intervals ({step:.3g}), and its derivatives "
+        "amplify the error of interpolating the samples; use C='auto' or a slower filter "
+        f"(T >= {SAMPLES_PER_FILTER * step:.3g})"
+    ]
+
+
+def _excitation(total: Moments, Theta: np.ndarray) -> float:
+    """The reciprocal condition number of the instruments' moments (scaled to a unit
+    diagonal), the one combination that vanishes identically left out."""
+    ZZ = total.XX if total.ZZ is None else total.ZZ
+    Q = linalg.null_space((Theta @ total.k ** np.arange(N + 1))[None, :]) if total.k is not None else np.eye(ZZ.shape[0])
+    M = Q.T @ ZZ @ Q
+    scale = np.sqrt(np.abs(np.diag(M)))
+    if not (scale > 0).all():
+        return 0.0
+    values = np.linalg.eigvalsh(M / np.outer(scale, scale))
+    return float(max(values.min(), 0.0) / values.max())
+
+
+def _residual_sum(Theta, record, k, settings) -> float:
+    """The output-error residual sum of squares at k, nuisances refitted (for comparing minima)."""
+    t, u, y = record
+    first, last = _nuisance_needs(settings["offset"], settings["initial_state"])
+    hold, known = settings["hold"], settings["known"]
+    x = simulate(t, u, k, hold=hold, **known) if _stable(Theta, k) else _stabilised_output(Theta, t, u, k, hold)
+    if last >= first:
+        Xi = _nuisance_columns(_prefilter(Theta, k, None), t, first, last)
+        x = x + Xi @ np.linalg.lstsq(Xi, y - x, rcond=None)[0]
+    return float(np.sum((y - x) ** 2))
+
+
+def _input_warnings(records, hold: str, nuisances: bool) -> tuple[list[str], bool]:
+    """What the inputs say before any fit: none (all zero, or constant while an initial
+    state and offset are estimated, which explain any step response), or held between
+    samples while hold="linear". Also whether an input excites nothing."""
+    warnings_, idle = [], False
+    for i, (_, u, _) in enumerate(records):
+        where = f" in record {i}" if len(records) > 1 else ""
+        changes = int(np.count_nonzero(np.diff(u)))
+        if changes == 0 and (nuisances or not u.any()):
+            idle = True
+            warnings_.append(
+                f"the input is {'zero' if not u.any() else 'constant'}{where}: it excites "
+                "nothing that the initial state and offset do not explain"
+                + (
+                    "; if the record starts at rest and without offset, fit with offset=False, "
+                    "initial_state=False"
+                    if u.any()
+                    else ""
+                )
+            )
+        elif hold == "linear" and 0 < changes < 0.2 * (u.size - 1):
+            warnings_.append(
+                f"the input looks held between samples{where} (it changes at {changes} of "
+                f"{u.size - 1} sampling intervals): if it was (a PRBS, a step, a DAC), pass "
+                "hold='zoh'; hold='linear' reads each jump as a ramp over one interval, which "
+                "biases k"
+            )
+    return warnings_, idle
+
+
+def _finish(Theta, records, k, coefficients, *, method, c, iterations, bounds, beta, notes,
+            automatic, settings, last_moments) -> Fit:  # fmt: skip
+    """The Fit: validation at k, uncertainty, warnings (issued as EstimationWarning)."""
+    nuisances = settings["offset"] or settings["initial_state"]
+    said, idle = _input_warnings(records, settings["hold"], nuisances)
+    found = list(notes) + said
+    if method == "ls" and not automatic:
+        found += _filter_warnings(c, np.concatenate([np.diff(t) for t, _, _ in records]))
     minima = _local_minima(coefficients, 0.0)
     minima = minima[(minima >= bounds[0]) & (minima <= bounds[1])]
-    informed_until = None if informed >= t[-1] else float(informed)
-    if not np.isnan(best):
-        message = f"the global minimum of J over the record, t = {t[0]:.6g} to {t[-1]:.6g}"
-    elif not (coefficients[1:] != 0).any():
-        message = f"J does not depend on k: the data carry no information about {UNKNOWN}"
-    else:
-        message = "J decreases without bound: bound the search with bounds=(lo, hi)"
-    return Fit(best, minima, coefficients, bounds, not np.isnan(best), message, informed_until)
+    empty = tuple(np.zeros(0) for _ in records)
+    common = dict(method=method, iterations=iterations, minima=minima, coefficients=coefficients,
+                  bounds=bounds, filter=c, hold=settings["hold"], known=dict(settings["known"]))  # fmt: skip
+    if not np.isfinite(k):
+        if not (coefficients[1:] != 0).any():
+            message = f"the data carry no information about {UNKNOWN}: the criterion does not depend on k"
+        else:
+            message = "the criterion decreases without bound: bound the search with bounds=(lo, hi)"
+        return _issued(Fit(math.nan, math.inf, (math.nan, math.nan), ok=False, message=message,
+                           warnings=tuple(found), fit_percent=math.nan, residual_rms=math.nan,
+                           noise_std=math.nan, offsets=tuple(0.0 for _ in records), fitted=empty,
+                           residuals=empty, **common))  # fmt: skip
+    with np.errstate(all="ignore"):
+        parts = [
+            _validate(Theta, record, k, method=method, c=c, weights=_weights(record[0], beta), **settings)
+            for record in records
+        ]  # fmt: skip
+        count = sum(record[0].size for record in records)
+        rss = sum(float(part.residuals @ part.residuals) for part in parts)
+        dof = count - sum(part.nuisances for part in parts) - 1
+        variance = rss / dof if dof > 0 else math.nan
+        information = sum(part.information for part in parts)
+        if method == "iv":
+            k_var = variance * sum(part.spread for part in parts) / information**2
+        else:
+            curvature = _value(coefficients[2:] * np.arange(2, 2 * N + 1) * np.arange(1, 2 * N), k)
+            k_var = variance * sum(part.influence for part in parts) / curvature**2
+        k_se = math.sqrt(k_var) if k_var >= 0 else math.nan
+        deviations = sum(part.deviations for part in parts)
+        fit_percent = 100.0 * (1.0 - math.sqrt(rss / deviations)) if deviations > 0 else math.nan
+    ok, message = True, f"{method}: k = {k:.6g} +- {k_se:.3g} (standard error)"
+    if not (information > 0 and np.isfinite(k_se)):
+        ok, k_se = False, math.inf
+        message = f"{UNKNOWN} is not identifiable from these data: the output does not depend on it"
+    elif k_se > POORLY_DETERMINED * abs(k):
+        found.append(
+            f"{UNKNOWN} is poorly determined by these data: k_se = {k_se:.3g} is "
+            f"{100 * k_se / abs(k) if k else math.inf:.3g} % of k (the criterion is nearly flat "
+            "in k); a longer record or a richer input (a PRBS, a multisine) would help"
+        )
+    free = sum(part.free_information for part in parts)
+    if nuisances and not idle and 0 < information < 0.01 * free:
+        found.append(
+            f"the offset and initial state take {100 * (1 - information / free):.3g} % of the "
+            f"information about {UNKNOWN} (the input's response looks like theirs, as a step "
+            "at the first sample does); if the record starts at rest and without offset, fit "
+            "with offset=False, initial_state=False"
+        )
+    if ok and not idle and _excitation(last_moments, Theta) < EXCITATION:
+        found.append(
+            "the input does not excite the system enough for this model: the moments of the "
+            f"filtered signals are singular to 1 part in {1 / EXCITATION:.0e}; a richer input "
+            "(a PRBS, a multisine) would determine k better"
+        )
+    if ok:
+        for other in minima[np.abs(minima - k) > 1e-6 * max(abs(k), 1e-300)]:
+            extra = sum(_residual_sum(Theta, record, other, settings) for record in records) - rss
+            if extra < MARGIN * variance:
+                found.append(
+                    f"another local minimum, {UNKNOWN} = {other:.6g}, fits the data "
+                    f"{'better' if extra < 0 else 'nearly as well'} (its residual sum of squares "
+                    f"differs from the estimate's by {extra / variance:+.3g} noise variances): the "
+                    "data cannot tell them apart; narrow the bounds or use a richer input"
+                )
+    if dof < 10:
+        found.append(
+            f"only {count} samples for k and {count - dof - 1} nuisance parameter(s): the noise "
+            f"level and k_se rest on {dof} residual degree(s) of freedom and mean little"
+        )
+    a = np.trim_zeros((Theta @ k ** np.arange(N + 1))[n::-1], "f")
+    sizes = np.abs(np.roots(a)) if a.size > 1 else np.zeros(0)
+    sizes = sizes[sizes > 0]  # an integrator has no time constant
+    slowest = 1.0 / sizes.min() if sizes.size else 0.0
+    span = max(float(t[-1] - t[0]) for t, _, _ in records)
+    if span < 0.5 * slowest:
+        found.append(
+            f"the record is short: it spans {span:.3g}, under half the slowest time constant "
+            f"of the fitted model ({slowest:.3g}), so the data see little of its dynamics"
+        )
+    for side, value in (("lower", bounds[0]), ("upper", bounds[1])):
+        if k == value:
+            found.append(
+                f"{UNKNOWN} = {k:.6g} is at the {side} bound: the criterion's minimum may lie "
+                "outside the bounds"
+            )
+    spread = math.sqrt(deviations / count)
+    whiteness = sum(part.whiteness for part in parts)
+    lags = WHITENESS_LAGS * len(parts)
+    if ok and math.sqrt(rss / count) > CLEAN * spread and whiteness > lags + WHITENESS_LEVEL * math.sqrt(2 * lags):
+        found.append(
+            f"the residuals are far from white (Ljung-Box Q = {whiteness:.3g} over {lags} lags, "
+            f"about {lags} if white): the model, the hold, an offset or the noise is not as "
+            "assumed, and k_se may be too small"
+        )
+    return _issued(Fit(
+        k, k_se, (k - Z95 * k_se, k + Z95 * k_se), ok=ok, message=message, warnings=tuple(found),
+        fit_percent=fit_percent, residual_rms=math.sqrt(rss / count),
+        noise_std=math.sqrt(variance) if variance >= 0 else math.nan,
+        offsets=tuple(part.offset for part in parts), fitted=tuple(part.fitted for part in parts),
+        residuals=tuple(part.residuals for part in parts), **common,
+    ))  # fmt: skip
+
+
+def _issued(result: Fit) -> Fit:
+    for text in result.warnings:
+        warnings.warn(text, EstimationWarning, stacklevel=3)
+    return result
 
 
 # Streaming: the estimate of a live data stream ------------------------------------------------
@@ -1486,28 +2382,48 @@ class Tracker:
         return None if run.informed >= run.t else float(run.informed)
 
 
-# From the command line: python THIS_FILE data.csv --k0 V [V ...] -----------------------------
+# From the command line: python THIS_FILE fit|estimate data.csv ... ------------------------------
+
+_NUMBER = re.compile(r"[+-]?(?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d+)?")
 
 
 def read_csv(path, columns: tuple[str, ...] = ("t", "u", "y")) -> tuple[np.ndarray, ...]:
-    """The named columns of a CSV file with a header row, as float arrays, in that order."""
-    with open(path, newline="", encoding="utf-8") as file:
-        rows = [(line, row) for line, row in enumerate(csv.reader(file), start=1) if row]
+    """The named columns of a CSV file with a header row, as float arrays, in that order.
+
+    A UTF-8 byte-order mark is read as nothing; every value must be a finite decimal number
+    (no "1_0", "nan" or "inf"); any other content is a ValueError naming the file, its line
+    and the column.
+    """
+    try:
+        with open(path, newline="", encoding="utf-8-sig") as file:
+            rows = [(line, row) for line, row in enumerate(csv.reader(file), start=1)
+                    if any(cell.strip() for cell in row)]  # fmt: skip
+    except UnicodeDecodeError as error:
+        raise ValueError(f"{path}: not UTF-8 text (byte {error.start}: {error.reason})") from None
+    except csv.Error as error:
+        raise ValueError(f"{path}: not a CSV file: {error}") from None
     if not rows:
-        raise ValueError(f"{path}: the file is empty; expected a header row naming {columns}")
+        raise ValueError(f"{path}: the file is empty; expected a header row naming {', '.join(columns)}")
     header = [name.strip() for name in rows[0][1]]
+    repeated = sorted({name for name in header if header.count(name) > 1})
+    if repeated:
+        raise ValueError(f"{path}:{rows[0][0]}: the header names the column {repeated[0]!r} twice")
     missing = [name for name in columns if name not in header]
     if missing:
-        raise ValueError(f"{path}: no column {missing[0]!r} (the header names {header})")
+        raise ValueError(f"{path}:{rows[0][0]}: no column {missing[0]!r} (the header names {', '.join(header)})")
+    if len(rows) == 1:
+        raise ValueError(f"{path}: no data: the file has a header row and nothing after it")
     index = [header.index(name) for name in columns]
     values = np.empty((len(rows) - 1, len(columns)))
     for row_number, (line, row) in enumerate(rows[1:]):
-        try:
-            values[row_number] = [float(row[i]) for i in index]
-        except (IndexError, ValueError):
-            raise ValueError(
-                f"{path}:{line}: expected numbers in columns {', '.join(columns)}, not {row}"
-            ) from None
+        for j, (name, i) in enumerate(zip(columns, index, strict=True)):
+            cell = row[i].strip() if i < len(row) else None
+            if cell is None or not _NUMBER.fullmatch(cell):
+                found = f"has {len(row)} values" if cell is None else f"holds {cell[:20]!r}"
+                raise ValueError(f"{path}:{line}: column {name!r} {found}, not a number")
+            values[row_number, j] = float(cell)
+            if not math.isfinite(values[row_number, j]):
+                raise ValueError(f"{path}:{line}: column {name!r}: {cell} is out of range")
     return tuple(values.T)
 
 
@@ -1518,63 +2434,146 @@ def _assignment(text: str) -> tuple[str, float]:
     return name.strip(), _real(name.strip(), value)
 
 
-def main(argv: list[str] | None = None) -> int:
-    """python THIS_FILE data.csv --k0 V [V ...]: estimate k from measured data."""
+def _filter_option(args):
+    """C from --filter TEXT or --filter-T T (None: the default)."""
+    if args.filter_T is not None:
+        return args.filter_T
+    return args.filter
+
+
+def _parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
         prog=f"{MODEL}.py",
-        description=f"Estimate the unknown {UNKNOWN} of {MODEL} from a CSV file with a header "
-        "row and columns t, u, y (time, input, output).",
+        description=f"Identify the unknown {UNKNOWN} of {MODEL} from CSV files with a header "
+        "row and columns t, u, y (time, input, output): `fit` (whole records, with a "
+        "standard error) or `estimate` (the paper's recursive estimate from k0).",
     )
-    parser.add_argument("data", help="the CSV file")
-    parser.add_argument("--k0", type=float, nargs="+", required=True, help="initial estimate(s)")
-    parser.add_argument("--beta", type=float, default=0.1, help="forgetting factor (0.1)")
-    parser.add_argument("--S0", type=float, default=1e-4, help="initial cost weight (1e-4)")
-    shape = parser.add_mutually_exclusive_group()
-    shape.add_argument("--filter-T", type=float, metavar="T", help="C(s) = (1 + sT)^(n+1)")
-    shape.add_argument(
-        "--filter", type=float, nargs="+", metavar="C", help="C(s) coefficients, highest first"
-    )
-    parser.add_argument("--hold", choices=HOLDS, default="linear", help="input interpolation")
-    parser.add_argument("--engine", choices=ENGINES, default="moments", help="the algorithm")
-    parser.add_argument(
-        "--bounds", type=float, nargs=2, metavar=("LO", "HI"), help="global search interval"
-    )
-    parser.add_argument("--method", choices=METHODS, default="RK23", help="the ODE's solver")
-    parser.add_argument("--rtol", type=float, default=1e-6, help="the ODE's relative tolerance")
-    parser.add_argument("--atol", type=float, default=1e-9, help="the ODE's absolute tolerance")
-    parser.add_argument(
-        "--set", action="append", default=[], metavar="NAME=VALUE", help="a known parameter"
-    )
-    parser.add_argument("--json", action="store_true", help="print the results as JSON")
+    commands = parser.add_subparsers(dest="command", required=True)
+    fit_ = commands.add_parser("fit", help="fit k to whole records (several add)")
+    fit_.add_argument("data", nargs="+", help="CSV file(s), one per experiment")
+    fit_.add_argument("--method", choices=FIT_METHODS, default="iv", help="iv (default) or ls")
+    fit_.add_argument("--k0", type=float, help="start of the iterations (default: least squares)")
+    fit_.add_argument("--offset", action=argparse.BooleanOptionalAction, default=True,
+                      help="estimate an output offset (default on)")  # fmt: skip
+    fit_.add_argument("--initial-state", action=argparse.BooleanOptionalAction, default=True,
+                      help="allow a non-zero initial state (default on)")  # fmt: skip
+    fit_.add_argument("--beta", type=float, default=0.0, help="forgetting factor (0)")
+    estimate_ = commands.add_parser("estimate", help="the paper's recursive estimate from k0")
+    estimate_.add_argument("data", help="the CSV file")
+    estimate_.add_argument("--k0", type=float, nargs="+", required=True, help="initial estimate(s)")
+    estimate_.add_argument("--beta", type=float, default=0.1, help="forgetting factor (0.1)")
+    estimate_.add_argument("--S0", type=float, default=1e-4, help="initial cost weight (1e-4)")
+    estimate_.add_argument("--engine", choices=ENGINES, default="moments", help="the algorithm")
+    estimate_.add_argument("--method", choices=METHODS, default="RK23", help="the ODE's solver")
+    estimate_.add_argument("--rtol", type=float, default=1e-6, help="the ODE's relative tolerance")
+    estimate_.add_argument("--atol", type=float, default=1e-9, help="the ODE's absolute tolerance")
+    for sub, default in ((fit_, "auto"), (estimate_, None)):
+        shape = sub.add_mutually_exclusive_group()
+        shape.add_argument("--filter", metavar="C(s)", default=default,
+                           help='the filter: "auto", or a polynomial in s such as "(1+s)^5" '
+                           f"(default {default or '(1 + s)^(n+1)'})")  # fmt: skip
+        shape.add_argument("--filter-T", type=float, metavar="T", help="C(s) = (1 + sT)^(n+1)")
+        sub.add_argument("--hold", choices=HOLDS, default="linear", help="input interpolation")
+        sub.add_argument("--bounds", type=float, nargs=2, metavar=("LO", "HI"),
+                         help="search k within [LO, HI]")  # fmt: skip
+        sub.add_argument("--columns", default="t,u,y", metavar="T,U,Y",
+                         help="the CSV columns of time, input and output (t,u,y)")  # fmt: skip
+        sub.add_argument("--set", action="append", default=[], metavar="NAME=VALUE",
+                         help="a known parameter")  # fmt: skip
+        sub.add_argument("--json", action="store_true", help="print the results as JSON")
+    return parser
+
+
+def _column_names(text: str) -> tuple[str, str, str]:
+    names = tuple(name.strip() for name in text.split(","))
+    if len(names) != 3 or not all(names):
+        raise ValueError(f"--columns takes three names T,U,Y, not {text!r}")
+    return names
+
+
+def _fit_main(args, known) -> tuple[dict, list[str], int]:
+    columns = _column_names(args.columns)
+    records = [read_csv(path, columns) for path in args.data]
+    result = fit(*([list(part) for part in zip(*records, strict=True)] if len(records) > 1 else records[0]),
+                 method=args.method, C=_filter_option(args), k0=args.k0, bounds=args.bounds,
+                 offset=args.offset, initial_state=args.initial_state, hold=args.hold,
+                 beta=args.beta, **known)  # fmt: skip
+    record = fit_record(result)
+    lines = [
+        f"{UNKNOWN} = {result.k:.6g} +- {result.k_se:.3g} (95 % interval {result.ci[0]:.6g} to "
+        f"{result.ci[1]:.6g}); fit {result.fit_percent:.4g} %, residual RMS {result.residual_rms:.3g}",
+    ]
+    if not result.ok:
+        lines.append(f"  {result.message}")
+    return record, lines, 0 if result.ok else 1
+
+
+def fit_record(result: Fit) -> dict:
+    """A Fit as plain JSON-able values (the --json record of `fit`)."""
+
+    def number(value):
+        value = float(value)
+        return value if math.isfinite(value) else None
+
+    return dict(
+        ok=result.ok, k=number(result.k), k_se=number(result.k_se), ci=[number(v) for v in result.ci],
+        fit_percent=number(result.fit_percent), residual_rms=number(result.residual_rms),
+        noise_std=number(result.noise_std), warnings=list(result.warnings),
+        minima=[float(v) for v in result.minima], iterations=result.iterations,
+        method=result.method, offsets=[number(v) for v in result.offsets],
+        filter=[float(v) for v in result.filter], message=result.message,
+    )  # fmt: skip
+
+
+def _estimate_main(args, known) -> tuple[dict, list[str], int]:
+    t, u, y = read_csv(args.data, _column_names(args.columns))
+    options = dict(beta=args.beta, S0=args.S0, C=_filter_option(args), hold=args.hold,
+                   engine=args.engine, bounds=args.bounds, method=args.method, rtol=args.rtol,
+                   atol=args.atol)  # fmt: skip
+    runs = [estimate(t, u, y, k0=k0, **options, **known) for k0 in args.k0]
+    records, lines = [], []
+    for k0, run in zip(args.k0, runs, strict=True):
+        best = float(run.global_k[-1])
+        records.append(dict(k0=k0, k=run.k, global_k=best if math.isfinite(best) else None,
+                            minima=run.minima().tolist(), ok=run.ok, message=run.message,
+                            warnings=list(run.warnings)))  # fmt: skip
+        minima = ", ".join(f"{value:.6g}" for value in records[-1]["minima"])
+        lines.append(f"k0 = {k0:g}: {UNKNOWN} = {run.k:.6g}, global minimum at {best:.6g} "
+                     f"(local minima of J: {minima})")  # fmt: skip
+        if not run.ok or run.informed_until is not None:
+            lines.append(f"  {run.message}")
+    status = 0 if all(run.ok for run in runs) else 1
+    return dict(ok=status == 0, runs=records), lines, status
+
+
+def main(argv: list[str] | None = None) -> int:
+    """python THIS_FILE fit DATA.csv [...] | estimate DATA.csv --k0 V [...]"""
+    argv = sys.argv[1:] if argv is None else list(argv)
+    if argv and argv[0] not in ("fit", "estimate", "-h", "--help"):
+        argv = ["estimate", *argv]  # the first version's form: python THIS_FILE data.csv --k0 V
+    parser = _parser()
     args = parser.parse_args(argv)
-    C = args.filter_T if args.filter is None else args.filter
+    prog = f"{parser.prog} {args.command}"
     try:
         known = dict(_assignment(text) for text in args.set)
-        t, u, y = read_csv(args.data)
-        options = dict(beta=args.beta, S0=args.S0, C=C, hold=args.hold, engine=args.engine,
-                       bounds=args.bounds, method=args.method)  # fmt: skip
-        options |= dict(rtol=args.rtol, atol=args.atol)
-        runs = [estimate(t, u, y, k0=k0, **options, **known) for k0 in args.k0]
+        with warnings.catch_warnings(record=True) as caught, np.errstate(all="ignore"):
+            warnings.simplefilter("always", EstimationWarning)
+            run = _fit_main if args.command == "fit" else _estimate_main
+            record, lines, status = run(args, known)
     except (OSError, ValueError) as error:
-        print(f"{parser.prog}: error: {error}", file=sys.stderr)
+        text = f"{error.filename}: {error.strerror}" if isinstance(error, OSError) and error.filename else error
+        if args.json:
+            print(json.dumps(dict(ok=False, model=MODEL, unknown=UNKNOWN, error=str(text))))
+        print(f"{prog}: error: {text}", file=sys.stderr)
         return 2
-    records = [
-        dict(k0=k0, k=run.k, global_k=float(run.global_k[-1]), minima=run.minima().tolist(),
-             ok=run.ok, message=run.message)  # fmt: skip
-        for k0, run in zip(args.k0, runs, strict=True)
-    ]
+    for warning in caught:
+        if issubclass(warning.category, EstimationWarning):
+            print(f"{prog}: warning: {warning.message}", file=sys.stderr)
     if args.json:
-        print(json.dumps(dict(model=MODEL, unknown=UNKNOWN, runs=records)))
-        return 0
-    for record, run in zip(records, runs, strict=True):
-        minima = ", ".join(f"{value:.6g}" for value in record["minima"])
-        print(
-            f"k0 = {record['k0']:g}: {UNKNOWN} = {record['k']:.6g}, global minimum at "
-            f"{record['global_k']:.6g} (local minima of J: {minima})"
-        )
-        if not record["ok"] or run.informed_until is not None:
-            print(f"  {record['message']}")
-    return 0
+        print(json.dumps(dict(model=MODEL, unknown=UNKNOWN, **record)))
+    else:
+        print("\n".join(lines))
+    return status
 
 
 if __name__ == "__main__":

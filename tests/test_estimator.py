@@ -156,3 +156,19 @@ def test_bad_input_to_the_other_functions(dc_drive, absorber):
         absorber.theta(tau=math.nan)
     with pytest.raises(ValueError, match=r"unexpected parameter 'L'.*: tau, l"):
         absorber.simulate([0.0, 1.0], [1.0, 1.0], 0.72, L=0.5)
+
+
+def test_the_template_defines_each_module_level_name_once():
+    """The algorithm's pieces are one module: a name defined twice would silently replace
+    the first definition for every function that uses it."""
+    import ast
+    from pathlib import Path
+
+    source = (Path(__file__).resolve().parent.parent / "generated" / "dc_drive.py").read_text()
+    names = []
+    for node in ast.parse(source).body:
+        if isinstance(node, ast.FunctionDef | ast.ClassDef):
+            names.append(node.name)
+        elif isinstance(node, ast.Assign):
+            names += [target.id for target in node.targets if isinstance(target, ast.Name)]
+    assert sorted({name for name in names if names.count(name) > 1}) == []

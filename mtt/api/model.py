@@ -300,8 +300,9 @@ class Model:
         return _delegate(self._estimator.estimate, t, u, y, **options)
 
     def fit(self, t, u, y, **options):
-        """The generated module's batch `fit(t, u, y, *, C, beta, bounds, ...)` -> Fit: the
-        global minimiser of the whole record's cost, no starting value needed."""
+        """The generated module's batch `fit(t, u, y, *, method="iv", C="auto", bounds,
+        offset, initial_state, hold, ...)` -> Fit: k over whole records (lists of arrays for
+        several), unbiased under output noise, with k_se, ci, fit_percent and warnings."""
         return _delegate(self._estimator.fit, t, u, y, **options)
 
 
