@@ -1048,6 +1048,9 @@ class _Run:
         """Phi, Gamma and W for each step, made once per distinct step and kept."""
         if steps.size == 1 and self.step and abs(steps[0] - self.step[0]) <= resolution:
             return self.step[2]  # the same step as last time (a regular record)
+        if steps.size > 16:  # an irregular piece: its own steps' maps, in one call
+            self.step = None
+            return self.setup.maps(steps)
         found = []
         for h in steps.tolist():
             key = next((key for key in self.cache if abs(key - h) <= resolution), None)
@@ -1126,9 +1129,12 @@ class _Run:
                                np.array([self.log_scale])))  # fmt: skip
             t, u, y = t[1:], u[1:], y[1:]
         span = 300.0 / self.setup.beta if self.setup.beta > 0 else math.inf
+        steps = np.diff(np.concatenate([[self.t], t]))
+        regular = steps.size == 0 or np.ptp(steps) <= TIME_RESOLUTION * np.abs(t).max()
+        length = BLOCK if regular else 2048  # irregular: a map for each step, in memory
         start = 0
         while start < t.size:  # pieces short enough to weigh without overflow
-            end = min(start + BLOCK, int(np.searchsorted(t, t[start] + span, "right")))
+            end = min(start + length, int(np.searchsorted(t, t[start] + span, "right")))
             piece = self._piece(t[start:end], u[start:end], y[start:end])
             pieces.append(piece)
             if record and not self.ok:
