@@ -402,7 +402,9 @@ def test_every_kind_the_compiler_reports_is_documented():
     """docs/language.md has a row for each kind the language, derivation and estimator
     stages can report (found in their source, so a new kind cannot go undocumented)."""
     reported = {"no_input", "no_output"}  # chosen by role, not written out at the call
-    call = re.compile(r'(?:error|warning|report|_fail|fail)\(\s*(?:theta,\s*)?"([a-z_]+)"')
+    call = re.compile(
+        r'(?:error|warning|report|_fail|fail|Problem|Unsupported)\(\s*(?:theta,\s*)?"([a-z_]+)"'
+    )
     for stage in ("language", "derivation", "estimator"):
         for path in (ROOT / "mtt" / stage).glob("*.py"):
             reported |= set(call.findall(path.read_text(encoding="utf-8")))

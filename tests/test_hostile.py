@@ -5,9 +5,11 @@ once, or simply works. The time bounds are hang guards: each case takes millisec
 from __future__ import annotations
 
 import time
+from pathlib import Path
 
 import pytest
 import sympy
+from oracle import oracle_tf
 
 from mtt.derivation.causality import assign
 from mtt.derivation.pipeline import transfer_for
@@ -219,3 +221,113 @@ def test_causality_of_a_thousand_bonds(models):
     causal = assign(graph)
     assert time.perf_counter() - start < HANG
     assert causal.dependent == () and causal.loops == ()
+
+
+# --- irrational constants: exact, in a field that holds them -------------------------------
+
+
+def rc_file(tmp_path, argument: str, params: str = "unknown c = 1\nparam q") -> Path:
+    path = tmp_path / "constants.bg"
+    path.write_text(model(argument, params))
+    return path
+
+
+def numeric(expression: sympy.Expr, point: dict) -> complex:
+    return complex(sympy.N(expression.xreplace(point), 30))
+
+
+@pytest.mark.parametrize(
+    "argument",
+    [
+        "pi*c",
+        "exp(1)*q + c",
+        "2 ** 0.5 * c",
+        "sqrt(7) + q*c",
+        "log(3)*c + q",
+        "log(12)/log(2) + c",
+        "sqrt(2)*sqrt(3)*c + sqrt(6)*q",
+        "2^(1/3)*c + 4^(1/3)",
+        "sqrt(1 + sqrt(2))*q + c",
+        "cos(pi/4)*c",
+    ],
+)
+def test_irrational_constants_meeting_the_unknown_and_a_symbol(tmp_path, argument):
+    # these ended in "expected an expression convertible to a rational function" (exit 3)
+    path = rc_file(tmp_path, argument)
+    start = time.perf_counter()
+    tf = transfer_for(path)
+    assert time.perf_counter() - start < 5 * HANG  # sympy's number fields take some time
+    G = tf.numerator / tf.denominator
+    expected = oracle_tf(path)
+    s, c, q = sympy.symbols("s c q")
+    for point in ({s: 2, c: 3, q: 5}, {s: sympy.Rational(-1, 3), c: 7, q: sympy.Rational(1, 2)}):
+        assert abs(numeric(G, point) - numeric(expected, point)) < 1e-20
+
+
+def test_relations_between_roots_give_the_canonical_transfer_function(tmp_path):
+    # two branches whose poles meet only because sqrt(2)^2 = 2: Y = s/(s + sqrt(2))^2 +
+    # 1/(s + sqrt(2)) = (2 s + sqrt(2))/(s + sqrt(2))^2, of degree 2, not 3 (with sqrt(2) a
+    # variable of its own, its common factor s + sqrt(2) was not found)
+    path = tmp_path / "cancel.bg"
+    path.write_text(
+        "model cancel\nSe:v -> 1:s\n1:s -> Df:i\n1:s -> 0:p\n0:p -> 1:b1\n"
+        "1:b1 -> R:r1(2*sqrt(2))\n1:b1 -> I:l1(1)\n1:b1 -> C:c1(1/2)\n"
+        "0:p -> 1:b2\n1:b2 -> R:r2(sqrt(2))\n1:b2 -> I:l2(1)\n"
+    )
+    tf = transfer_for(path)
+    s, root = sympy.Symbol("s"), sympy.sqrt(2)
+    assert (tf.degree("num"), tf.degree("den")) == (1, 2)
+    assert sympy.expand(tf.numerator - (2 * s + root)) == 0
+    assert sympy.expand(tf.denominator - (s + root) ** 2) == 0
+
+
+@pytest.mark.parametrize(
+    ("argument", "decimal"),
+    [
+        ("sin(1)*c", "0.84147098480789651"),
+        ("exp(1/2) + c", "1.6487212707001281"),
+        ("c*log(pi)", "1.1447298858494002"),
+        ("2^pi*c", "8.8249778270762876"),
+    ],
+)
+def test_constants_without_exact_arithmetic_say_what_to_write(tmp_path, argument, decimal):
+    problem, took = failure(model(argument), tmp_path)
+    kind, line, column, message = only(problem)
+    assert (kind, line, column) == ("unsupported_constant", 4, 12)
+    assert f"write its value as a decimal, {decimal}" in message and took < HANG
+
+
+@pytest.mark.parametrize(
+    ("params", "argument", "kind", "column"),
+    [
+        ("param q = 10^3999 + 1", "sqrt(q)*c", "syntax", 12),  # sympy took 6 s for this root
+        ("param q = 1e100", "exp(q)*c", "syntax", 12),
+        ("param q = -1", "sqrt(q)*c", "bad_value", 12),
+        ("param q = 10^60\nparam w = q^70", "w*c", "syntax", 11),  # w has 4200 digits
+        ("param q = c^60", "q^2", "syntax", 12),  # degree 120 in c
+    ],
+)
+def test_values_are_measured_with_the_parameters_put_in(models, params, argument, kind, column):
+    start = time.perf_counter()
+    problem = models.failure(model(argument, "unknown c = 1\n" + params))
+    assert time.perf_counter() - start < HANG
+    (error,) = problem.errors
+    assert error.kind == kind and error.position.column == column
+
+
+def test_a_root_of_a_negative_value_found_only_exactly(tmp_path):
+    problem, _ = failure(model("sqrt(q)*c", "unknown c = 1\nparam q = 1 - pi"), tmp_path)
+    kind, line, column, message = only(problem)
+    assert (kind, line) == ("bad_value", 5) and "not a real number" in message
+
+
+def test_coefficients_beyond_four_thousand_digits(tmp_path):
+    # each value has 4000 digits; the transfer function's coefficients 7998: too many to
+    # print (CPython converts at most 4300 digits) and meaningless in floating point
+    problem, took = failure(
+        "model big\nparam r = 1e3999\nparam k = 1e3999\nunknown c = 1\nSe:v -> 1:a\n"
+        "1:a -> R:r\n1:a -> C:k\n1:a -> I:c\n1:a -> Df:y\n",
+        tmp_path,
+    )
+    kind, line, _, message = only(problem)
+    assert (kind, line) == ("too_large", 6) and "7998 digits" in message and took < HANG

@@ -33,6 +33,12 @@ from sympy.polys.rings import PolyElement
 
 MAX_POINTS = 1 << 14  # grid points: beyond, the caller eliminates over the polynomials
 PRIME_LIMIT = 1 << 31
+MAX_BITS = 60_000  # Hadamard's bound on the coefficients: beyond, `TooLarge`
+
+
+class TooLarge(Exception):
+    """The determinants' coefficients could have more than `MAX_BITS` bits."""
+
 
 Entries = dict[tuple[int, int], PolyElement]
 
@@ -135,6 +141,8 @@ def _plan(entries: Entries, size: int, nvars: int) -> _Plan | None:
         max(_degree_bound(entries, size, g), _degree_bound(leading, size, g)) for g in range(nvars)
     )
     bits = max(_log2_hadamard(entries, size), _log2_hadamard(leading, size))
+    if bits > MAX_BITS:
+        raise TooLarge(bits)
     primes = math.ceil((bits + 2) / math.log2(_prime(0)))  # +2: the sign, and a margin
     return _Plan(size, degrees, tuple(steps), sign, max(primes, 1))
 
@@ -286,7 +294,8 @@ def bordered_determinants(entries: Entries, size: int, ring):
     """det of the leading (size - 1) block and of the whole matrix, exact elements of the
     polynomial ring `ring`; None when the grid would be too large, or when the leading
     block is structurally singular (its determinant is zero for every value): the caller
-    then eliminates over the polynomials."""
+    then eliminates over the polynomials. `TooLarge` when the coefficients could have
+    more than `MAX_BITS` bits."""
     plan = _plan(entries, size, ring.ngens)
     if plan is None:
         return None

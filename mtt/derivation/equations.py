@@ -18,11 +18,11 @@ from functools import cache
 
 import networkx as nx
 import sympy
-from sympy.polys.domains import QQ
 from sympy.polys.domains.domain import Domain
 from sympy.polys.matrices import DomainMatrix
 
 from mtt.derivation.causality import CausalBondGraph
+from mtt.derivation.constants import Constants, Unsupported
 from mtt.derivation.parameters import Parametrisation
 from mtt.language.bondgraph import Component
 from mtt.language.components import PortVariables, Role
@@ -37,7 +37,7 @@ Form = dict  # variable name -> coefficient (a domain element): a linear combina
 class Equations:
     causal: CausalBondGraph
     parametrisation: Parametrisation
-    domain: Domain  # the coefficient field: QQ, or QQ(unknown, symbols, ...)
+    domain: Domain  # the coefficient field: QQ or Q(alpha), or Q(alpha)(unknowns, symbols...)
     relations: tuple[tuple[str, sympy.Expr], ...]  # the causal equations, variable = expression
     states: tuple[str, ...]  # the descriptor variables x
     E: DomainMatrix
@@ -55,22 +55,12 @@ def _energy(component: Component) -> str:
     return f"{component.type.energy_prefix}_{component.name}"
 
 
-def _coefficient_domain(values: list[sympy.Expr], free: tuple[str, ...]) -> Domain:
-    """QQ, or the rational functions in the free parameters (and any irrational constants)."""
-    gens = [sympy.Symbol(name) for name in free]
-    extra = set()
-    for value in values:
-        for part in value.as_numer_denom():
-            if not part.is_Rational:
-                extra.update(sympy.Poly(part).gens)
-    gens += sorted(extra - set(gens), key=sympy.default_sort_key)
-    return QQ.frac_field(*gens) if gens else QQ
-
-
-def _parameter_values(causal: CausalBondGraph, parametrisation: Parametrisation) -> dict:
-    """Each component's exact parameter value, checked to be rational in every unknown."""
+def _parameter_values(causal: CausalBondGraph, parametrisation: Parametrisation):
+    """Each component's exact parameter value, checked to be real, finite and rational in
+    every unknown, with its constants written for the coefficient field (see `constants`);
+    and what the values hold besides rational numbers."""
     graph = causal.bondgraph
-    problems, values = [], {}
+    problems, values, held = [], {}, Constants()
     unknowns = [sympy.Symbol(name) for name in parametrisation.unknowns]
     for component in graph.components:
         if component.argument is None:
@@ -78,29 +68,36 @@ def _parameter_values(causal: CausalBondGraph, parametrisation: Parametrisation)
         value = parametrisation.apply(component.argument.value)
         where = component.argument.position
         irrational = [k for k in unknowns if not value.is_rational_function(k)]
+        label = f"the parameter of {component.label}"
         if value.has(sympy.zoo, sympy.oo, sympy.nan):
-            problems.append(
-                error(
-                    "singular_model",
-                    f"the parameter of {component.label} is "
-                    f"infinite ({component.argument.value} = {value})",
-                    where,
-                )
-            )
-        elif irrational:
-            problems.append(
-                error(
-                    "non_rational_unknown",
-                    f"the parameter of "
-                    f"{component.label} is {value}, not a rational function of "
-                    f"the unknown {irrational[0]}",
-                    where,
-                )
-            )
-        values[component.name] = value
+            message = f"{label} is infinite ({component.argument.value} = {value})"
+            problems.append(error("singular_model", message, where))
+            continue
+        if irrational:
+            message = f"{label} is {value}, not a rational function of the unknown {irrational[0]}"
+            problems.append(error("non_rational_unknown", message, where))
+            continue
+        try:
+            held.scan(value)
+        except Unsupported as problem:
+            problems.append(error(problem.kind, f"{label} is {value}: {problem}", where))
+            continue
+        values[component.name] = held.prepare(value)
     if problems:
         raise ModelError(graph.source, problems)
-    return values
+    return values, held
+
+
+def _coefficient_domain(held: Constants, free: tuple[str, ...], source) -> Domain:
+    """The field of rational functions in the free parameters and the constants' variables,
+    over QQ or the algebraic number field of the model's roots."""
+    try:
+        ground = held.ground()
+    except Unsupported as problem:
+        raise ModelError(source, [error(problem.kind, str(problem))]) from None
+    gens = [sympy.Symbol(name) for name in free]
+    gens += [g for g in held.variables() if g not in gens]
+    return ground.frac_field(*gens) if gens else ground
 
 
 def _signals(graph, component: Component, value) -> tuple[tuple[str, sympy.Expr], ...]:
@@ -218,16 +215,14 @@ def derive(causal: CausalBondGraph, parametrisation: Parametrisation) -> Equatio
     unique solution is then decided by the pencil sE - A (see `transfer`).
     """
     graph = causal.bondgraph
-    values = _parameter_values(causal, parametrisation)
+    values, held = _parameter_values(causal, parametrisation)
     signals = {c.name: _signals(graph, c, values.get(c.name)) for c in graph.components}
-    coefficients = [v for name, v in values.items() if not signals[name]]
-    coefficients += [c for terms in signals.values() for _, c in terms]
-    K = _coefficient_domain(coefficients, parametrisation.free)
+    K = _coefficient_domain(held, parametrisation.free, graph.source)
     explicit: dict[str, Form] = {}
     extra: list[str] = []
     constraints: list[Form] = []
     storage = [c for c in graph.components if c.type.role is Role.STORAGE]
-    convert = cache(K.from_sympy)  # most coefficients are 1, -1 and a few parameter values
+    convert = cache(lambda value: held.element(K, value))  # most are 1, -1 and a few values
     for component in graph.components:
         v = _port_variables(causal, component, values.get(component.name), signals[component.name])
         rows = [{name: convert(c) for name, c in row.items()} for row in component.type.relation(v)]

@@ -8,13 +8,16 @@ the parameters it names.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from fractions import Fraction
 from functools import cache
 from types import MappingProxyType
 
 import sympy
 
-from mtt.language.bondgraph import BondGraph, Selection
-from mtt.language.diagnostics import ModelError, error
+from mtt.language.bondgraph import BondGraph, Selection, values_problems
+from mtt.language.diagnostics import Diagnostic, ModelError, error
+from mtt.language.expressions import ATOM, Measure
+from mtt.language.measures import Problem, rational
 
 
 @dataclass(frozen=True)
@@ -57,6 +60,20 @@ class Parametrisation:
         return self.unknowns + self.symbols
 
 
+def _measure(name: str, value: sympy.Expr) -> Measure | Diagnostic:
+    """What the limits know of a value given on the command line (a number), or why it is
+    refused."""
+    try:
+        if value.is_Rational:
+            return rational(Fraction(int(value.p), int(value.q)), None)
+        approx = float(value)
+    except Problem as problem:
+        return error(problem.kind, f"--set {name}: {problem}")
+    except (TypeError, OverflowError):  # not real, or beyond floats
+        return error("bad_value", f"--set {name}: {value} is not a finite real number")
+    return Measure(approx=approx, degree=ATOM.degree)
+
+
 def parametrise(graph: BondGraph, choice: ParameterChoice) -> Parametrisation:
     """Resolve the parameters of `graph` under `choice` (raise `ModelError` for bad names)."""
     problems = [
@@ -68,14 +85,23 @@ def parametrise(graph: BondGraph, choice: ParameterChoice) -> Parametrisation:
     if problems:
         raise ModelError(graph.source, problems)
     unknowns = graph.unknowns
+    symbolic = {
+        name
+        for name, p in graph.parameters.items()
+        if (p.value is None and name not in choice.overrides)
+        or choice.symbolic
+        or name in choice.keep
+        or name in unknowns
+    }
+    overrides = {name: _measure(name, value) for name, value in choice.overrides.items()}
+    problems = [p for p in overrides.values() if isinstance(p, Diagnostic)]
+    if not problems:
+        problems = values_problems(graph.parameters, graph.components, symbolic, overrides)
+    if problems:
+        raise ModelError(graph.source, problems)
     values = {
         name: choice.overrides.get(name, p.value.value if p.value is not None else None)
         for name, p in graph.parameters.items()
-    }
-    symbolic = {
-        name
-        for name, value in values.items()
-        if value is None or choice.symbolic or name in choice.keep or name in unknowns
     }
 
     @cache

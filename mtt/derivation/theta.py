@@ -118,7 +118,7 @@ def theta_matrix(tf: TransferFunction) -> Theta:
             power_s, powers, others = monom[0], monom[1 : 1 + p], monom[1 + p :]
             term = (
                 sign
-                * sympy.Integer(int(coefficient))
+                * poly.ring.domain.to_sympy(coefficient)
                 * sympy.Mul(*(g**e for g, e in zip(rest, others, strict=True)))
             )
             row = rows[offset + power_s]

@@ -9,7 +9,9 @@ which keeps large models fast.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
+from fractions import Fraction
 from math import gcd
 
 import sympy
@@ -18,6 +20,7 @@ from sympy.polys.rings import PolyElement
 
 from mtt.derivation.equations import Equations
 from mtt.language.diagnostics import ModelError, error
+from mtt.language.measures import MAX_DIGITS
 
 LAPLACE = sympy.Symbol("s")
 
@@ -43,13 +46,22 @@ class TransferFunction:
         return max((m[0] for m in poly.monoms()), default=0)
 
 
+def _ground(equations: Equations):
+    """The ground field of the coefficients: QQ, or an algebraic number field."""
+    K = equations.domain
+    return K.domain if K.is_FractionField else K
+
+
 def _field(equations: Equations):
-    """s adjoined to the coefficient field of the equations, as fractions over ZZ.
+    """s adjoined to the coefficient field of the equations, as fractions over ZZ (or over
+    the algebraic number field of the model's roots).
 
     Over ZZ the fraction-free solve below runs several times faster than over QQ.
     """
-    gens = (LAPLACE, *getattr(equations.domain, "symbols", ()))
-    return ZZ.frac_field(*gens), gens
+    K = equations.domain
+    gens = (LAPLACE, *(K.symbols if K.is_FractionField else ()))
+    ground = _ground(equations)
+    return (ZZ if ground.is_QQ else ground).frac_field(*gens), gens
 
 
 def _singular(equations: Equations, why: str) -> ModelError:
@@ -66,7 +78,7 @@ def transfer_function(equations: Equations) -> TransferFunction:
     and interpolation (`determinants`); when that would need too many points (many kept
     symbols), by a fraction-free solve over the polynomials instead.
     """
-    from mtt.derivation.determinants import bordered_determinants  # numpy: not for `check`
+    from mtt.derivation.determinants import TooLarge, bordered_determinants  # numpy
 
     F, gens = _field(equations)
     lift = lambda M: M.to_sparse().convert_to(F)  # noqa: E731
@@ -78,10 +90,14 @@ def transfer_function(equations: Equations) -> TransferFunction:
         bordered = pencil.hstack(lift(equations.B)).vstack(
             (-lift(equations.C)).hstack(lift(equations.D))
         )
-        denominators, cleared = bordered.clear_denoms_rowwise(convert=True)
-        ring = cleared.domain
-        entries = cleared.to_dok()
-        determinants = bordered_determinants(entries, size + 1, ring.ring)
+        determinants = None
+        if _ground(equations).is_QQ:  # integer coefficients: by evaluation and interpolation
+            denominators, cleared = bordered.clear_denoms_rowwise(convert=True)
+            ring = cleared.domain
+            try:
+                determinants = bordered_determinants(cleared.to_dok(), size + 1, ring.ring)
+            except TooLarge as bits:
+                raise _too_large(equations, f"could have {int(bits.args[0] * 0.30103)}") from None
         if determinants is None:
             G = _solve(equations, F, pencil, lift(equations.B), lift(equations.C)) + D
         else:
@@ -90,9 +106,36 @@ def transfer_function(equations: Equations) -> TransferFunction:
                 raise _singular(equations, ": det(sE - A) is identically zero")
             last = F.convert(denominators.to_dok()[size, size])  # the last row's multiplier
             G = F.convert_from(full, ring) / (F.convert_from(leading, ring) * last)
-    if any(not isinstance(g, sympy.Symbol) for g in gens):
-        G = _evaluate_constants(equations, F, G)
-    return _canonical(equations, gens, G)
+    tf = _canonical(equations, gens, G)
+    digits = max((_digits(x) for p in (tf.num, tf.den) for x in _rationals((p,))), default=0)
+    if digits > MAX_DIGITS:
+        raise _too_large(equations, f"have {int(digits)}")
+    return tf
+
+
+def _digits(x: Fraction) -> float:
+    return max(math.log10(abs(x.numerator)) if x else 0, math.log10(x.denominator))
+
+
+def _too_large(equations: Equations, have: str) -> ModelError:
+    """The transfer function's coefficients are beyond `MAX_DIGITS` digits: reported at
+    the component whose value holds the largest number."""
+    params = equations.parametrisation
+    largest, where = -1.0, None
+    for component in equations.causal.bondgraph.components:
+        if component.argument is not None:
+            value = params.apply(component.argument.value)
+            size = max(
+                (_digits(Fraction(int(r.p), int(r.q))) for r in value.atoms(sympy.Rational)),
+                default=0,
+            )
+            if size > largest:
+                largest, where = size, component.argument.position
+    message = (
+        f"the transfer function's coefficients {have} digits, more than {MAX_DIGITS} (a limit): "
+        "the model's numbers are too large together; scale its units"
+    )
+    return ModelError(equations.causal.bondgraph.source, [error("too_large", message, where)])
 
 
 def _solve(equations: Equations, F, pencil, B, C):
@@ -108,22 +151,35 @@ def _solve(equations: Equations, F, pencil, B, C):
     return CX / F.convert_from(den, M.domain)
 
 
-def _evaluate_constants(equations: Equations, F, G):
-    """Apply the relations between irrational constants (sqrt(2)**2 = 2, ...).
-
-    A known parameter like sqrt(2) is a generator of the coefficient field, which knows
-    nothing of its algebraic relations: terms that vanish by them would survive and leave
-    G non-canonical (wrong degree, sign and content). Written out, sympy evaluates them.
-    """
-    num, den = (sympy.expand(p.as_expr()) for p in (G.numer, G.denom))
-    if den == 0:
-        raise _singular(equations, "")
-    return F.from_sympy(num) / F.from_sympy(den)
+def _rationals(polys) -> list[Fraction]:
+    """The rational numbers the coefficients of polynomials are written with (3/2 and 1/6 in
+    3/2 + sqrt(2)/6, over an algebraic number field)."""
+    if polys and polys[0].ring.domain.is_ZZ:
+        return [Fraction(int(c)) for p in polys for c in p.coeffs()]
+    return [
+        Fraction(int(r.p), int(r.q))
+        for p in polys
+        for c in p.coeffs()
+        for r in p.ring.domain.to_sympy(c).as_coefficients_dict().values()
+    ]
 
 
 def _canonical(equations: Equations, gens, G) -> TransferFunction:
-    """Coprime, integer, content 1, positive leading term of the highest power of s."""
-    num, den = G.numer, G.denom  # coprime, over ZZ
+    """Coprime, integer, content 1, positive leading term of the highest power of s.
+
+    Over an algebraic number field, the same for the rational numbers the coefficients are
+    written with (sqrt(2)/6 with 1/6): den's leading coefficient made 1, then those numbers
+    cleared of denominators and of their common factor (for rational coefficients, this is
+    the form over ZZ).
+    """
+    num, den = G.numer, G.denom  # coprime
+    domain = num.ring.domain
+    if not domain.is_ZZ:
+        num, den = num.quo_ground(den.LC), den.quo_ground(den.LC)
+        scale = domain.convert(math.lcm(*(x.denominator for x in _rationals((num, den)))))
+        num, den = num.mul_ground(scale), den.mul_ground(scale)
+        content = domain.convert(math.gcd(*(int(x) for x in _rationals((num, den)) if x)))
+        return TransferFunction(equations, gens, num.quo_ground(content), den.quo_ground(content))
     content = gcd(*(int(c) for c in (*num.coeffs(), *den.coeffs()) if c))
     num, den = num.quo_ground(content), den.quo_ground(content)
     if den.LC < 0:

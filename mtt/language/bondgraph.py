@@ -24,6 +24,7 @@ from mtt.language.diagnostics import Diagnostic, ModelError, Severity, Source, e
 from mtt.language.elements import Component, Parameter
 from mtt.language.expressions import Expression
 from mtt.language.flatten import Assembly, Bond, assemble
+from mtt.language.measures import check_values
 from mtt.language.parse import ParsedModel, PortDecl
 from mtt.language.subsystems import Instance, load_tree
 
@@ -215,6 +216,16 @@ class _Whole:
         return chosen.name
 
 
+def values_problems(parameters: dict, components, symbolic, overrides=None) -> list[Diagnostic]:
+    """The limits (see `measures`) of every parameter's value with the values it names put
+    in, and of every component's argument with those of the parameters not kept `symbolic`
+    (nor without a value) put in; `overrides`: measures of values given on the command line."""
+    values = {name: p.value for name, p in parameters.items()}
+    values.update(overrides or {})
+    arguments = [c.argument for c in components if c.argument is not None]
+    return check_values(values, (), ()) + check_values(values, symbolic, arguments)
+
+
 def _check_files(root: Instance) -> dict[str, FileCheck]:
     """Each instance checked in its own scope, its subsystems first."""
     checks: dict[str, FileCheck] = {}
@@ -252,6 +263,8 @@ def build(parsed: ParsedModel, selection: Selection | None = None) -> BondGraph:
     for check in checks.values():
         problems += check.problems
     problems += assembly.problems + whole.problems
+    if not problems:  # every name known, no cycle: the values can be put in
+        problems += values_problems(assembly.parameters, assembly.components.values(), unknowns)
     warnings = [w for check in checks.values() for w in check.warnings]
     if problems:
         raise ModelError(parsed.source, _once(problems + warnings))

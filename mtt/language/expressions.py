@@ -108,14 +108,14 @@ class Sum(Node):
     """t1 ± t2 ± ...: each term with whether it is subtracted (a chain `a - b + c` is one
     node; a parenthesised sum inside it is a term of its own)."""
 
-    terms: tuple[tuple[bool, Node], ...]
+    parts: tuple[tuple[bool, Node], ...]
 
 
 @dataclass(frozen=True)
 class Product(Node):
     """f1 */ f2 */ ...: each factor with whether it divides."""
 
-    factors: tuple[tuple[bool, Node], ...]
+    parts: tuple[tuple[bool, Node], ...]
 
 
 @dataclass(frozen=True)
@@ -158,7 +158,7 @@ def text(node: Node) -> str:
     if isinstance(node, Negative):
         return "-" + _wrapped(node.operand, (Product, Power))
     if isinstance(node, Sum):
-        (_, first), *rest = node.terms  # a chain starts with a term added
+        (_, first), *rest = node.parts  # a chain starts with a term added
         parts = [_wrapped(first, (Product, Power, Number))]
         for subtracted, term in rest:
             parts.append(
@@ -166,7 +166,7 @@ def text(node: Node) -> str:
             )
         return "".join(parts)
     if isinstance(node, Product):
-        (_, first), *rest = node.factors  # a chain starts with a factor multiplied
+        (_, first), *rest = node.parts  # a chain starts with a factor multiplied
         parts = [_wrapped(first, (Power, Product))]
         for divides, factor in rest:
             parts.append(
@@ -200,12 +200,12 @@ def to_sympy(node: Node) -> sympy.Expr:
         return -to_sympy(node.operand)
     if isinstance(node, Sum):
         value = sympy.Integer(0)
-        for subtracted, term in node.terms:
+        for subtracted, term in node.parts:
             value = value - to_sympy(term) if subtracted else value + to_sympy(term)
         return value
     if isinstance(node, Product):
         value = sympy.Integer(1)
-        for divides, factor in node.factors:
+        for divides, factor in node.parts:
             value = value / to_sympy(factor) if divides else value * to_sympy(factor)
         return value
     if isinstance(node, Power):
@@ -229,9 +229,9 @@ def rename(node: Node, names: dict[str, str], signals: dict[str, str], where) ->
     if isinstance(node, Negative):
         return Negative(position, again(node.operand))
     if isinstance(node, Sum):
-        return Sum(position, tuple((sign, again(term)) for sign, term in node.terms))
+        return Sum(position, tuple((sign, again(term)) for sign, term in node.parts))
     if isinstance(node, Product):
-        return Product(position, tuple((sign, again(factor)) for sign, factor in node.factors))
+        return Product(position, tuple((sign, again(factor)) for sign, factor in node.parts))
     if isinstance(node, Power):
         return Power(position, again(node.base), again(node.exponent))
     return replace(node, position=position)
