@@ -55,6 +55,8 @@ API (the unknown is always called k here)
                                     fit_percent, residual_rms, warnings, minima, simulate()
     moments(t, u, y, *, k=None, C=None, hold="linear", offset=True, initial_state=True,
             **known) -> Moments: one record's statistics for a step of fit (they add)
+    fit_records(records, *, keep=True, ...) -> Fit: fit over Records([(t, u, y), ...]) or
+                                    records held elsewhere that answer with sums (mtt.batch)
     estimate(t, u, y, *, k0, beta=0.1, S0=1e-4, C=None, hold="linear", engine="moments",
              bounds=None, method="RK23", rtol=1e-6, atol=1e-9, max_step=inf,
              progress=None, **known) -> Estimate: k^ at every sample (and global_k)
@@ -82,7 +84,7 @@ import re
 import sys
 import warnings
 from bisect import bisect_left, bisect_right
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 from numpy.polynomial import polynomial as P
@@ -1819,8 +1821,9 @@ CLEAN = 1e-5  # residuals below this fraction of the output's spread are noise-f
 class _Record:
     """One record's part in the fit's validation (the sums add over records)."""
 
-    fitted: np.ndarray  # y^ at the samples
-    residuals: np.ndarray  # y - y^
+    fitted: np.ndarray | None  # y^ at the samples (None: left where the record is)
+    residuals: np.ndarray | None  # y - y^ (None: likewise)
+    rss: float  # the residual sum of squares
     offset: float  # the output at rest with zero input: c / a0 (0 without offsets)
     information: float  # |psi|^2, nuisances projected out (weighted)
     spread: float  # sum of the squared weighted psi (the variance's numerator)
@@ -1829,6 +1832,10 @@ class _Record:
     nuisances: int
     deviations: float  # sum (y - mean y)^2
     whiteness: float  # Ljung-Box statistic of the residuals
+
+    def without_signals(self) -> "_Record":
+        """The sums alone, without the per-sample fitted output and residuals."""
+        return replace(self, fitted=None, residuals=None)
 
 
 def _nuisance_columns(f: np.ndarray, t: np.ndarray, first: int, last: int) -> np.ndarray:
@@ -1887,7 +1894,7 @@ def _validate(Theta, record, k, *, method, c, hold, offset, initial_state, weigh
     if method == "ls":
         influence = _ls_influence(Theta, t, u, y, k, c, hold, first, last, w)
     return _Record(
-        fitted=fitted, residuals=residuals, offset=offset_value,
+        fitted=fitted, residuals=residuals, rss=float(residuals @ residuals), offset=offset_value,
         information=float(projected @ (w * projected)), spread=float(projected @ (w**2 * projected)),
         free_information=float(psi @ (w * psi)), influence=influence, nuisances=Xi.shape[1],
         deviations=float(np.sum((y - y.mean()) ** 2)), whiteness=_whiteness(residuals),
@@ -1952,7 +1959,8 @@ class Fit:
     the measured one over all records; residual_rms: the RMS of y - y^; noise_std: the
     noise's standard deviation estimated from them; offsets: per record, the output at rest
     with zero input (an operating point; 0 without offset); filter: C(s) of the
-    least-squares fit (highest power first); fitted, residuals: y^ and y - y^ per record.
+    least-squares fit (highest power first); fitted, residuals: y^ and y - y^ per record
+    (empty when `fit_records` left them where the records are).
     """
 
     k: float
@@ -2011,10 +2019,14 @@ def _records(t, u, y) -> list[tuple[np.ndarray, np.ndarray, np.ndarray]]:
 
 
 def _auto_filter(Theta: np.ndarray, k, records) -> np.ndarray:
+    """`_filter_for` the records' median sampling interval and shortest span."""
+    step = float(np.median(np.concatenate([np.diff(t) for t, _, _ in records])))
+    return _filter_for(Theta, k, step, min(float(t[-1] - t[0]) for t, _, _ in records))
+
+
+def _filter_for(Theta: np.ndarray, k, step: float, span: float) -> np.ndarray:
     """(1 + sT)^(n+1) with T the geometric mean of the time constants of A(s, k) (none
     known: of the record's span and sampling interval), within [10 dt, span / 10]."""
-    step = float(np.median(np.concatenate([np.diff(t) for t, _, _ in records])))
-    span = min(float(t[-1] - t[0]) for t, _, _ in records)
     lo, hi = SAMPLES_PER_FILTER * step, span / SAMPLES_PER_FILTER
     T = math.sqrt(lo * hi)
     if k is not None and np.isfinite(k):
@@ -2038,13 +2050,89 @@ def _weights(t: np.ndarray, beta: float) -> np.ndarray | None:
     return None if beta == 0 else np.exp(-beta * (t[-1] - t))
 
 
+@dataclass(frozen=True)
+class Shape:
+    """What a fit needs to know of one record besides its moments (small, whatever the
+    record's length): its samples, span, distinct sampling intervals with their counts (so
+    that the median interval over many records is exact), and its input's changes.
+    `label` names the record in warnings (None: "record i", its place in the fit)."""
+
+    samples: int
+    span: float
+    steps: np.ndarray
+    counts: np.ndarray
+    changes: int  # sampling intervals over which the input changes
+    excited: bool  # whether the input is ever non-zero
+    label: str | None = None
+
+    @classmethod
+    def of(cls, t: np.ndarray, u: np.ndarray) -> "Shape":
+        steps, counts = np.unique(np.diff(t), return_counts=True)
+        return cls(t.size, float(t[-1] - t[0]), steps, counts, int(np.count_nonzero(np.diff(u))),
+                   bool(u.any()))  # fmt: skip
+
+
+def _median_step(shapes) -> float:
+    """np.median of every record's sampling intervals, from their distinct values and counts."""
+    steps = np.concatenate([shape.steps for shape in shapes])
+    order = np.argsort(steps, kind="stable")
+    steps, ends = steps[order], np.cumsum(np.concatenate([shape.counts for shape in shapes])[order])
+    middle = steps[np.searchsorted(ends, [(ends[-1] - 1) // 2, ends[-1] // 2], side="right")]
+    return float(np.mean(middle))
+
+
+def _check_sizes(shapes, offset: bool, initial_state: bool) -> None:
+    """Each record must have more samples than the nuisance parameters and k."""
+    first, last = _nuisance_needs(offset, initial_state)
+    nuisances = max(last - first + 1, 0)
+    for i, shape in enumerate(shapes):
+        if shape.samples < nuisances + 2:
+            where = f"{shape.label or f'record {i}'} has" if len(shapes) > 1 else "the record has"
+            raise ValueError(
+                f"{where} {shape.samples} samples: too few to determine k and {nuisances} "
+                f"nuisance parameter(s) (offset, initial state); need at least {nuisances + 2}"
+            )
+
+
+class Records:
+    """The records of a fit, held in this process: `fit_records` asks them only for sums
+    (moments, validation sums) and their shapes, so that records held elsewhere (by worker
+    processes, on a cluster: mtt.batch) can offer the same four methods, each answer the
+    sum of their parts', and be fitted by the same algorithm without moving the data.
+
+    records: checked (t, u, y) arrays, one triple per record. `validate` returns each
+    record's _Record; keep=False drops its fitted output and residuals (only sums travel).
+    """
+
+    def __init__(self, records) -> None:
+        self.records = list(records)
+
+    def shapes(self) -> list[Shape]:
+        return [Shape.of(t, u) for t, u, _ in self.records]
+
+    def moments(self, Theta, k, c, beta, settings) -> Moments:
+        """The records' moments for a step of the fit (see `_record_moments`), summed."""
+        return sum(
+            _record_moments(Theta, *record, k=k, c=c, beta=beta, **settings)
+            for record in self.records
+        )  # fmt: skip
+
+    def validate(self, Theta, k, method, c, beta, settings, keep: bool = True) -> list:
+        parts = [
+            _validate(Theta, record, k, method=method, c=c, weights=_weights(record[0], beta), **settings)
+            for record in self.records
+        ]  # fmt: skip
+        return parts if keep else [part.without_signals() for part in parts]
+
+    def residual_sum(self, Theta, k, settings) -> float:
+        """The output-error residual sum of squares at k over the records."""
+        return sum(_residual_sum(Theta, record, k, settings) for record in self.records)
+
+
 def _step(Theta, records, k, c, bounds, beta, settings) -> tuple[float, np.ndarray, Moments]:
     """One step of the fit: the records' moments (least squares for k None, else an
     instrumental-variable step at k), summed, and the global minimiser of the criterion."""
-    total = sum(
-        _record_moments(Theta, *record, k=k, c=c, beta=beta, **settings)
-        for record in records
-    )  # fmt: skip
+    total = records.moments(Theta, k, c, beta, settings)
     coefficients = total.criterion(Theta)
     return float(_global_minimisers(coefficients, 0.0, bounds)[0]), coefficients, total
 
@@ -2070,7 +2158,18 @@ def fit(t, u, y, *, method: str = "iv", C="auto", k0=None, bounds=None, offset: 
     nuisance parameters, projected out. beta >= 0 weighs recent data more (0: all alike).
     Every problem a user can act on is in `warnings` and issued as an EstimationWarning.
     """
-    records = _records(t, u, y)
+    return fit_records(Records(_records(t, u, y)), method=method, C=C, k0=k0, bounds=bounds,
+                       offset=offset, initial_state=initial_state, hold=hold, beta=beta, **known)  # fmt: skip
+
+
+def fit_records(records, *, method: str = "iv", C="auto", k0=None, bounds=None,
+                offset: bool = True, initial_state: bool = True, hold: str = "linear",
+                beta: float = 0.0, keep: bool = True, **known) -> Fit:  # fmt: skip
+    """`fit` over records wherever they are held: `Records` (here) or an object with the
+    same methods (shapes, moments, validate, residual_sum) whose answers are sums over
+    records held elsewhere. Only those sums and the shapes reach this function, so a fit
+    over records spread across processes runs these same steps. keep=False: the Fit has
+    no fitted outputs and residuals (they stay where the records are)."""
     _choice("method", method, FIT_METHODS)
     _choice("hold", hold, HOLDS)
     beta = _positive("beta", beta, allow_zero=True)
@@ -2080,23 +2179,19 @@ def fit(t, u, y, *, method: str = "iv", C="auto", k0=None, bounds=None, offset: 
     Theta = theta(**known)
     automatic = isinstance(C, str) and C.strip() == "auto"
     c = None if automatic else filter_polynomial(C)
-    first, last = _nuisance_needs(offset, initial_state)
-    nuisances = max(last - first + 1, 0)
-    for i, (times, _, _) in enumerate(records):
-        if times.size < nuisances + 2:
-            where = f"record {i} has" if len(records) > 1 else "the record has"
-            raise ValueError(
-                f"{where} {times.size} samples: too few to determine k and {nuisances} nuisance "
-                f"parameter(s) (offset, initial state); need at least {nuisances + 2}"
-            )
+    shapes = records.shapes()
+    if not shapes:
+        raise ValueError("no records to fit")
+    _check_sizes(shapes, offset, initial_state)
     settings = dict(hold=hold, offset=offset, initial_state=initial_state, known=known)
     notes: list[str] = []
+    interval, span = _median_step(shapes), min(shape.span for shape in shapes)
     if automatic:
-        c = _auto_filter(Theta, k0 if k0 is not None else TRUE_VALUE, records)
+        c = _filter_for(Theta, k0 if k0 is not None else TRUE_VALUE, interval, span)
     with np.errstate(all="ignore"):
         k, coefficients, total = _step(Theta, records, None, c, bounds, beta, settings)
         if automatic and method == "ls" and np.isfinite(k):
-            c = _auto_filter(Theta, k, records)
+            c = _filter_for(Theta, k, interval, span)
             k, coefficients, total = _step(Theta, records, None, c, bounds, beta, settings)
         iterations = 0
         if method == "iv":
@@ -2116,9 +2211,9 @@ def fit(t, u, y, *, method: str = "iv", C="auto", k0=None, bounds=None, offset: 
                         f"the instrumental-variable steps did not settle in {MAX_ITERATIONS} "
                         f"iterations (the last moved k by {step:.3g}): the estimate may be poor"
                     )
-    return _finish(Theta, records, k, coefficients, method=method, c=c, iterations=iterations,
-                   bounds=bounds, beta=beta, notes=notes, automatic=automatic, settings=settings,
-                   last_moments=total)  # fmt: skip
+    return _finish(Theta, records, shapes, k, coefficients, method=method, c=c,
+                   iterations=iterations, bounds=bounds, beta=beta, notes=notes,
+                   automatic=automatic, settings=settings, last_moments=total, keep=keep)  # fmt: skip
 
 
 # The fit's verdict: its uncertainty, its fit and the warnings a user can act on ------------------
@@ -2132,10 +2227,14 @@ def _fastest(c: np.ndarray) -> float:
 
 
 def _filter_warnings(c: np.ndarray, steps: np.ndarray) -> list[str]:
-    """A filter faster than the sampling supports: its derivatives amplify the error of
-    interpolating the samples linearly (the DC drive, noise-free, T = 0.02 at dt = 0.01:
-    0.011 for 10)."""
-    step = float(np.median(steps))
+    """`_filter_warnings_at` the median of the sampling intervals `steps`."""
+    return _filter_warnings_at(c, float(np.median(steps)))
+
+
+def _filter_warnings_at(c: np.ndarray, step: float) -> list[str]:
+    """A filter faster than the sampling (interval `step`) supports: its derivatives
+    amplify the error of interpolating the samples linearly (the DC drive, noise-free,
+    T = 0.02 at dt = 0.01: 0.011 for 10)."""
     T = _fastest(c)
     if T >= SAMPLES_PER_FILTER * step:
         return []
@@ -2172,47 +2271,47 @@ def _residual_sum(Theta, record, k, settings) -> float:
     return float(np.sum((y - x) ** 2))
 
 
-def _input_warnings(records, hold: str, nuisances: bool) -> tuple[list[str], bool]:
+def _input_warnings(shapes, hold: str, nuisances: bool) -> tuple[list[str], bool]:
     """What the inputs say before any fit: none (all zero, or constant while an initial
     state and offset are estimated, which explain any step response), or held between
     samples while hold="linear". Also whether an input excites nothing."""
     warnings_, idle = [], False
-    for i, (_, u, _) in enumerate(records):
-        where = f" in record {i}" if len(records) > 1 else ""
-        changes = int(np.count_nonzero(np.diff(u)))
-        if changes == 0 and (nuisances or not u.any()):
+    for i, shape in enumerate(shapes):
+        where = f" in {shape.label or f'record {i}'}" if len(shapes) > 1 else ""
+        changes = shape.changes
+        if changes == 0 and (nuisances or not shape.excited):
             idle = True
             warnings_.append(
-                f"the input is {'zero' if not u.any() else 'constant'}{where}: it excites "
+                f"the input is {'zero' if not shape.excited else 'constant'}{where}: it excites "
                 "nothing that the initial state and offset do not explain"
                 + (
                     "; if the record starts at rest and without offset, fit with offset=False, "
                     "initial_state=False"
-                    if u.any()
+                    if shape.excited
                     else ""
                 )
             )
-        elif hold == "linear" and 0 < changes < 0.2 * (u.size - 1):
+        elif hold == "linear" and 0 < changes < 0.2 * (shape.samples - 1):
             warnings_.append(
                 f"the input looks held between samples{where} (it changes at {changes} of "
-                f"{u.size - 1} sampling intervals): if it was (a PRBS, a step, a DAC), pass "
+                f"{shape.samples - 1} sampling intervals): if it was (a PRBS, a step, a DAC), pass "
                 "hold='zoh'; hold='linear' reads each jump as a ramp over one interval, which "
                 "biases k"
             )
     return warnings_, idle
 
 
-def _finish(Theta, records, k, coefficients, *, method, c, iterations, bounds, beta, notes,
-            automatic, settings, last_moments) -> Fit:  # fmt: skip
+def _finish(Theta, records, shapes, k, coefficients, *, method, c, iterations, bounds, beta,
+            notes, automatic, settings, last_moments, keep) -> Fit:  # fmt: skip
     """The Fit: validation at k, uncertainty, warnings (issued as EstimationWarning)."""
     nuisances = settings["offset"] or settings["initial_state"]
-    said, idle = _input_warnings(records, settings["hold"], nuisances)
+    said, idle = _input_warnings(shapes, settings["hold"], nuisances)
     found = list(notes) + said
     if method == "ls" and not automatic:
-        found += _filter_warnings(c, np.concatenate([np.diff(t) for t, _, _ in records]))
+        found += _filter_warnings_at(c, _median_step(shapes))
     minima = _local_minima(coefficients, 0.0)
     minima = minima[(minima >= bounds[0]) & (minima <= bounds[1])]
-    empty = tuple(np.zeros(0) for _ in records)
+    empty = tuple(np.zeros(0) for _ in shapes) if keep else ()
     common = dict(method=method, iterations=iterations, minima=minima, coefficients=coefficients,
                   bounds=bounds, filter=c, hold=settings["hold"], known=dict(settings["known"]))  # fmt: skip
     if not np.isfinite(k):
@@ -2222,15 +2321,12 @@ def _finish(Theta, records, k, coefficients, *, method, c, iterations, bounds, b
             message = "the criterion decreases without bound: bound the search with bounds=(lo, hi)"
         return _issued(Fit(math.nan, math.inf, (math.nan, math.nan), ok=False, message=message,
                            warnings=tuple(found), fit_percent=math.nan, residual_rms=math.nan,
-                           noise_std=math.nan, offsets=tuple(0.0 for _ in records), fitted=empty,
+                           noise_std=math.nan, offsets=tuple(0.0 for _ in shapes), fitted=empty,
                            residuals=empty, **common))  # fmt: skip
     with np.errstate(all="ignore"):
-        parts = [
-            _validate(Theta, record, k, method=method, c=c, weights=_weights(record[0], beta), **settings)
-            for record in records
-        ]  # fmt: skip
-        count = sum(record[0].size for record in records)
-        rss = sum(float(part.residuals @ part.residuals) for part in parts)
+        parts = records.validate(Theta, k, method, c, beta, settings, keep)
+        count = sum(shape.samples for shape in shapes)
+        rss = sum(part.rss for part in parts)
         dof = count - sum(part.nuisances for part in parts) - 1
         variance = rss / dof if dof > 0 else math.nan
         information = sum(part.information for part in parts)
@@ -2268,7 +2364,7 @@ def _finish(Theta, records, k, coefficients, *, method, c, iterations, bounds, b
         )
     if ok:
         for other in minima[np.abs(minima - k) > 1e-6 * max(abs(k), 1e-300)]:
-            extra = sum(_residual_sum(Theta, record, other, settings) for record in records) - rss
+            extra = records.residual_sum(Theta, other, settings) - rss
             if extra < MARGIN * variance:
                 found.append(
                     f"another local minimum, {UNKNOWN} = {other:.6g}, fits the data "
@@ -2285,7 +2381,7 @@ def _finish(Theta, records, k, coefficients, *, method, c, iterations, bounds, b
     sizes = np.abs(np.roots(a)) if a.size > 1 else np.zeros(0)
     sizes = sizes[sizes > 0]  # an integrator has no time constant
     slowest = 1.0 / sizes.min() if sizes.size else 0.0
-    span = max(float(t[-1] - t[0]) for t, _, _ in records)
+    span = max(shape.span for shape in shapes)
     if span < 0.5 * slowest:
         found.append(
             f"the record is short: it spans {span:.3g}, under half the slowest time constant "
@@ -2310,8 +2406,9 @@ def _finish(Theta, records, k, coefficients, *, method, c, iterations, bounds, b
         k, k_se, (k - Z95 * k_se, k + Z95 * k_se), ok=ok, message=message, warnings=tuple(found),
         fit_percent=fit_percent, residual_rms=math.sqrt(rss / count),
         noise_std=math.sqrt(variance) if variance >= 0 else math.nan,
-        offsets=tuple(part.offset for part in parts), fitted=tuple(part.fitted for part in parts),
-        residuals=tuple(part.residuals for part in parts), **common,
+        offsets=tuple(part.offset for part in parts),
+        fitted=tuple(part.fitted for part in parts) if keep else (),
+        residuals=tuple(part.residuals for part in parts) if keep else (), **common,
     ))  # fmt: skip
 
 
