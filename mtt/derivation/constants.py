@@ -88,15 +88,27 @@ class Constants:
     functions: set = field(default_factory=set)  # of kept symbols: sqrt(q), exp(q)...
     elements: dict = field(default_factory=dict)  # each root, as an element of `ground()`
 
-    def scan(self, expr: sympy.Expr) -> None:
-        """Record what `expr` holds; raise `Unsupported` for what the field cannot."""
+    def scan(self, value: sympy.Expr) -> sympy.Expr:
+        """Record what `value` holds and return it with every logarithm of a rational
+        number written with those of primes; raise `Unsupported` for what the field cannot
+        hold."""
+        logs = [a for a in value.atoms(sympy.log) if a.args[0].is_Rational]
+        for log in logs:
+            argument = log.args[0]
+            if argument > 0 and max(abs(argument.p), argument.q) > MAX_LOG_ARGUMENT:
+                raise _unsupported(log)  # its argument would be factored
+        value = value.xreplace({log: self._logs(log.args[0]) for log in logs if log.args[0] > 0})
+        self._scan(value)
+        return value
+
+    def _scan(self, expr: sympy.Expr) -> None:
         if expr.is_Rational or expr.is_Symbol:
             return
         if expr.is_number:
             self._constant(expr)
         elif expr.is_Add or expr.is_Mul or (expr.is_Pow and expr.exp.is_Integer):
             for argument in expr.args:
-                self.scan(argument)
+                self._scan(argument)
         else:  # sqrt(q), exp(q), 2^q, of parameters kept symbolic: variables of their own
             self.functions.add(expr)
 
@@ -114,27 +126,18 @@ class Constants:
                 message = f"{expr} is out of range: a power of e above {MAX_DEGREE}"
                 raise Unsupported("syntax", message)
             self.transcendental.add(sympy.E)
-        elif isinstance(expr, sympy.log) and expr.args[0].is_Rational and expr.args[0] > 0:
-            argument = expr.args[0]
-            if max(abs(argument.p), argument.q) > MAX_LOG_ARGUMENT:
-                raise _unsupported(expr)
-            self.transcendental.update(self._logs(argument).atoms(sympy.log))
+        elif isinstance(expr, sympy.log) and expr.args[0].is_Integer and expr.args[0].is_prime:
+            self.transcendental.add(expr)  # the logarithm of a prime (see `scan`)
         elif expr.is_Add or expr.is_Mul or (expr.is_Pow and expr.exp.is_Integer):
             for argument in expr.args:
-                self.scan(argument)
+                self._scan(argument)
         else:
             raise _unsupported(expr)
 
     @staticmethod
     def _logs(argument: sympy.Rational) -> sympy.Expr:
-        return sympy.expand_log(sympy.log(argument), force=True)
-
-    def prepare(self, expr: sympy.Expr) -> sympy.Expr:
-        """`expr` with every logarithm of a rational number written with those of primes."""
-        return expr.replace(
-            lambda e: isinstance(e, sympy.log) and e.args[0].is_Rational,
-            lambda e: self._logs(e.args[0]),
-        )
+        """log(argument) written with the logarithms of primes: log(12) = 2 log(2) + log(3)."""
+        return sympy.expand_log(sympy.log(argument), force=True, factor=True)
 
     def ground(self) -> Domain:
         """QQ, or the algebraic number field of the roots met: Q(theta) for a primitive

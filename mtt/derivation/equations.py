@@ -78,11 +78,9 @@ def _parameter_values(causal: CausalBondGraph, parametrisation: Parametrisation)
             problems.append(error("non_rational_unknown", message, where))
             continue
         try:
-            held.scan(value)
+            values[component.name] = held.scan(value)
         except Unsupported as problem:
             problems.append(error(problem.kind, f"{label} is {value}: {problem}", where))
-            continue
-        values[component.name] = held.prepare(value)
     if problems:
         raise ModelError(graph.source, problems)
     return values, held

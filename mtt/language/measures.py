@@ -162,7 +162,16 @@ def arithmetic(
     same operators, which b extends (a chain is one node, not a nesting)."""
     if a.exact is not None and b.exact is not None:
         x, y = a.exact, b.exact
-        return rational({"+": x + y, "-": x - y, "*": x * y}.get(operator) or x / y, where)
+        value = (
+            x + y
+            if operator == "+"
+            else x - y
+            if operator == "-"
+            else x * y
+            if operator == "*"
+            else x / y
+        )
+        return rational(value, where)
     (an, ad), (bn, bd) = a.degree, b.degree
     (tan, tad), (tbn, tbd) = a.terms, b.terms
     (dan, dad), (dbn, dbd) = a.digits, b.digits
