@@ -25,6 +25,7 @@ os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")  # before numpy loads OpenBLA
 import argparse  # noqa: E402
 import statistics  # noqa: E402
 import time  # noqa: E402
+import warnings  # noqa: E402
 
 import numpy as np  # noqa: E402
 from _generated import generated  # noqa: E402
@@ -43,7 +44,15 @@ def output_error(module, t, u, y, k0: float = 5.0) -> float:
 AT_REST = dict(offset=False, initial_state=False)  # the step starts the record from rest
 
 
+def least_squares(module, t, u, y) -> float:
+    """The global minimiser of J over the record, without fit's uncertainty and checks:
+    the record's moments, the cost's polynomial, its global minimum (what fit was)."""
+    coefficients = module.moments(t, u, y, **AT_REST).criterion(module.theta())
+    return float(module._global_minimisers(coefficients, 0.0, (-np.inf, np.inf))[0])
+
+
 def main() -> None:
+    warnings.simplefilter("ignore", UserWarning)  # the fits' advice (EstimationWarning)
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--seeds", type=int, default=20, help="records (20)")
     args = parser.parse_args()
@@ -55,6 +64,7 @@ def main() -> None:
         "output-error least squares (scipy)": lambda y: output_error(dc, t, u, y),
         "fit (instrumental variables)": lambda y: dc.fit(t, u, y, **AT_REST).k,
         "fit, method='ls'": lambda y: dc.fit(t, u, y, method="ls", C=None, **AT_REST).k,
+        "least-squares minimiser alone": lambda y: least_squares(dc, t, u, y),
         "estimate (k0 = 5)": lambda y: dc.estimate(t, u, y, k0=5.0).k,
     }
     times = {name: [] for name in methods}

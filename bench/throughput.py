@@ -21,6 +21,7 @@ import statistics  # noqa: E402
 import subprocess  # noqa: E402
 import sys  # noqa: E402
 import time  # noqa: E402
+import warnings  # noqa: E402
 
 import numpy as np  # noqa: E402
 from _generated import ROOT, generated  # noqa: E402
@@ -63,7 +64,8 @@ MEMORY = """
 import json, resource, sys, tracemalloc
 sys.path.insert(0, {generated!r})
 import numpy as np
-import dc_drive
+import dc_drive, warnings
+warnings.simplefilter("ignore", UserWarning)
 t = 0.001 * np.arange(10**6 + 1)
 u = np.where((t // 20) % 2 == 0, 1.0, -1.0)
 y = dc_drive.simulate(t, u, 10.0) + np.random.default_rng(0).uniform(-0.01, 0.01, t.size)
@@ -75,6 +77,7 @@ print(json.dumps(dict(fit=peak, process=resource.getrusage(resource.RUSAGE_SELF)
 
 
 def main() -> None:
+    warnings.simplefilter("ignore", UserWarning)  # the fits' advice (EstimationWarning)
     dc, absorber = generated("dc_drive"), generated("absorber")
     rows = []
     t, u, y = record(dc, 10.0, 10**6, 0.0)

@@ -259,9 +259,10 @@ def transfer_function(k: float, **known: float) -> tuple[np.ndarray, np.ndarray]
     return (num if num.size else np.zeros(1)), den
 
 
-def _responses(A, B, t: np.ndarray, W: np.ndarray, holds: tuple[str, ...]) -> np.ndarray:
+def _responses(A, B, t: np.ndarray, W: np.ndarray, holds: tuple[str, ...], out=None) -> np.ndarray:
     """States (len(W), len(t), order) of x' = A x + B w from rest, for each row w of W
-    interpolated per its hold: one propagation for all the signals."""
+    interpolated per its hold: one propagation for all the signals (written into `out`, a
+    view of that shape, if given)."""
     W = np.atleast_2d(W)
     steps = _Steps.of(t) if t.size > 1 else _Steps(np.ones(1), None)
 
@@ -271,7 +272,7 @@ def _responses(A, B, t: np.ndarray, W: np.ndarray, holds: tuple[str, ...]) -> np
 
     if steps.index is None:
         Phi, Gamma = maps(steps.values)
-    states = np.empty((W.shape[0], t.size, A.shape[0]))
+    states = np.empty((W.shape[0], t.size, A.shape[0])) if out is None else out
     states[:, 0] = 0.0
     ends = np.stack([W[:, :-1], W[:, 1:]], -1)
     chunk = BLOCK if steps.index is None else 2048
@@ -1329,6 +1330,28 @@ class Estimate:
         return _local_minima(self._row(i), self.khat[i])
 
 
+PRIOR_SHARE = 10.0  # the data's curvature under this multiple of the prior's: a warning
+
+
+def prior_weight(t, u, y, *, k0: float, fraction: float = 1e-4, C=None, hold: str = "linear",
+                 **known) -> float:  # fmt: skip
+    """An S0 for `estimate` relative to the data: `fraction` times the data's curvature of
+    the cost at k0 per unit of time, so that the prior weighs as much as `fraction` time
+    units of the record (S0 = 1e-4 absolute outweighs the data of a slow filter)."""
+    t, u, y = _signals(("t", t), ("u", u), ("y", y), minimum=2)
+    k0 = _real("k0", k0)
+    fraction = _positive("fraction", fraction)
+    Theta = theta(**known)
+    if isinstance(C, str) and C.strip() == "auto":
+        C = _auto_filter(Theta, k0, [(t, u, y)])
+    total = moments(t, u, y, C=C, hold=hold, offset=False, initial_state=False, **known)
+    coefficients = total.criterion(Theta)
+    curvature = float(_value(coefficients[2:] * np.arange(2, 2 * N + 1) * np.arange(1, 2 * N), k0))
+    if not curvature > 0:
+        raise ValueError(f"the data carry no information about {UNKNOWN} at k0 = {k0:g}: no relative S0")
+    return fraction * curvature / float(t[-1] - t[0])
+
+
 def estimate(
     t,
     u,
@@ -1430,6 +1453,15 @@ def estimate(
                 f"; the data stopped informing the estimate at t = {informed:.6g} (after "
                 "that they are rounding noise, which leaves it unchanged)"
             )
+    prior = math.log(S0) - beta * float(times[-1] - times[0])  # log of its J_2 at the end
+    if stop is None and log_J2[-1] - prior < math.log(1.0 + PRIOR_SHARE):
+        data = math.exp(log_J2[-1]) - math.exp(prior) if log_J2[-1] > -700 else 0.0
+        found.append(
+            f"the data carry little information about {UNKNOWN}: at the end the prior S0 "
+            f"weighs {math.exp(prior):.3g} in the cost's curvature against the data's "
+            f"{max(data, 0.0):.3g}, so the estimate stays near k0; lower S0 (prior_weight "
+            "sets one relative to the data) or use a richer or longer record"
+        )
     for text in found:
         warnings.warn(text, EstimationWarning, stacklevel=2)
     return Estimate(
@@ -1608,15 +1640,16 @@ def _filtered_moments(c, t, W, holds, needs, beta: float = 0.0) -> np.ndarray:
     start, times e^(beta tau) within it, which shifts G by beta/2."""
     order = c.size - 1
     A, B = _realisation(c)
-    states = _responses(A, B, t, W, holds)
-    steps = _Steps.of(t)
-    h = steps.at(steps.values) if steps.index is not None else np.full(t.size - 1, steps.values[0])
     width = order + 2
-    V = np.empty((t.size - 1, width * len(holds)))  # each interval's start: [z; w; slope]
-    for j, (w, hold, z) in enumerate(zip(W, holds, states, strict=True)):
-        V[:, j * width : j * width + order] = z[:-1]
-        V[:, j * width + order] = w[:-1]
-        V[:, j * width + order + 1] = np.diff(w) / h if hold == "linear" else 0.0
+    V = np.empty((t.size, width * len(holds)))  # each interval's start [z; w; slope], per signal
+    blocks = V.reshape(t.size, len(holds), width)
+    _responses(A, B, t, W, holds, out=blocks[:, :, :order].swapaxes(0, 1))
+    steps = _Steps.of(t)
+    h = steps.at(steps.values) if steps.index is not None else steps.values[0]
+    for j, (w, hold) in enumerate(zip(W, holds, strict=True)):
+        blocks[:, j, order] = w
+        blocks[:-1, j, order + 1] = np.diff(w) / h if hold == "linear" else 0.0
+    V = V[:-1]  # the last sample starts no interval
     if beta:
         V *= np.exp(-0.5 * beta * (t[-1] - t[:-1]))[:, None]
     G = linalg.block_diag(*[_drift(A, B)] * len(holds))
@@ -1807,7 +1840,7 @@ def moments(t, u, y, *, k=None, C=None, hold: str = "linear", offset: bool = Tru
 # how each noise sample moves J' (the filters' adjoints, below).
 
 WHITENESS_LAGS = 20  # residual autocorrelations tested
-WHITENESS_LEVEL = 3.0  # chi-square(WHITENESS_LAGS) quantile scale: Q > mean + LEVEL std
+WHITENESS_LEVEL = 5.0  # Q beyond its mean + LEVEL std when white: about 1e-4 false alarms
 CLEAN = 1e-5  # residuals below this fraction of the output's spread are noise-free data
 
 

@@ -172,3 +172,24 @@ def test_the_template_defines_each_module_level_name_once():
         elif isinstance(node, ast.Assign):
             names += [target.id for target in node.targets if isinstance(target, ast.Name)]
     assert sorted({name for name in names if names.count(name) > 1}) == []
+
+
+def test_a_prior_that_outweighs_the_data_is_a_warning_and_prior_weight_sets_a_relative_one(
+    dc_drive,
+):
+    """A slow filter, T = 10: the paper's S0 = 1e-4 outweighs the data (the estimate stays
+    near k0, with a warning); S0 relative to the data recovers 10."""
+    t, u = step(10.0)
+    y = dc_drive.simulate(t, u, 10.0)
+    with pytest.warns(dc_drive.EstimationWarning, match="the data carry little information"):
+        held = dc_drive.estimate(t, u, y, k0=5.0, C=10.0)
+    assert held.k < 6.0 and held.warnings
+    S0 = dc_drive.prior_weight(t, u, y, k0=5.0, C=10.0)
+    assert 1e-12 < S0 < 1e-9
+    freed = dc_drive.estimate(t, u, y, k0=5.0, C=10.0, S0=S0)
+    assert freed.k == pytest.approx(10.0, rel=1e-4) and freed.warnings == ()
+    for t_, u_, y_ in ((t, 0 * u, 0 * y), (t[:3], u[:3], y[:3]), (t * 1e-300, u, y)):
+        with pytest.warns(dc_drive.EstimationWarning, match="the data carry little information"):
+            assert dc_drive.estimate(t_, u_, y_, k0=5.0).k == pytest.approx(5.0, rel=1e-6)
+    with pytest.raises(ValueError, match="no information about k at k0 = 5: no relative S0"):
+        dc_drive.prior_weight(t, 0 * u, 0 * y, k0=5.0)

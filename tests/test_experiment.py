@@ -349,6 +349,35 @@ def test_fit_user_errors_exit_2(args, message, tmp_path, monkeypatch, capsys):
     assert status == 2 and message in err and "Traceback" not in err
 
 
+def test_estimate_with_a_relative_prior_and_absurd_times(tmp_path, capsys):
+    slow = [DC_DRIVE, "--filter-T", "10", "--k0", "5"]
+    status, out, err = mtt(capsys, "estimate", *slow)
+    assert status == 0 and "mtt estimate: warning: the data carry little information" in err
+    record = estimates(capsys, *slow, "--S0-relative", "1e-4")
+    assert record["runs"][0]["k"] == pytest.approx(10.0, rel=1e-4)
+    scaled = tmp_path / "scaled.csv"
+    t = np.linspace(0.0, 10.0, 101)
+    scaled.write_text("t,u,y\n" + "".join(f"{v * 1e300:.17g},1,{v / 10:.17g}\n" for v in t))
+    status, out, err = mtt(capsys, "estimate", DC_DRIVE, "--data", str(scaled), "--k0", "5")
+    assert status == 1 and "the filter is too fast for the sampling" in err
+    status, out, err = mtt(capsys, "fit", DC_DRIVE, "--data", str(scaled))
+    assert status == 2 and "are the times in the model's unit (seconds)?" in err
+
+
+def test_a_model_named_as_a_python_module_is_refused(tmp_path, capsys):
+    model = tmp_path / "numpy.bg"
+    text = (ROOT / "models" / "dc_drive.bg").read_text()
+    model.write_text(text.replace("model dc_drive", "model numpy"))
+    status, _, err = mtt(capsys, "compile", str(model), "-o", str(tmp_path))
+    assert (
+        status == 2
+        and "error[reserved_name]: the model name 'numpy' is the name of a Python" in err
+    )
+    model.write_text(text.replace("model dc_drive", "model json"))
+    status, _, err = mtt(capsys, "fit", str(model))
+    assert status == 2 and "the model name 'json'" in err
+
+
 def test_json_results_say_ok(tmp_path, capsys):
     status, out, _ = mtt(capsys, "compile", DC_DRIVE, "-o", str(tmp_path), "--json")
     assert status == 0 and json.loads(out) == {

@@ -181,6 +181,11 @@ def run_all(module: ModuleType, data: Data, args) -> list[Run]:
         for label, C in filters:
             for k0 in args.k0:
                 start = bar.n
+                if args.S0_relative is not None:
+                    options["S0"] = module.prior_weight(
+                        data.t, data.u, data.y, k0=k0, fraction=args.S0_relative, C=C,
+                        hold=args.hold,
+                    )  # fmt: skip
                 result = module.estimate(
                     data.t, data.u, data.y, k0=k0, C=C, **options,
                     progress=lambda now, start=start: bar.update(start + now - data.t[0] - bar.n),
@@ -345,7 +350,8 @@ def cmd_estimate(args) -> int:
         for label, run in zip(labels, runs, strict=True)
     ]  # fmt: skip
     title = f"{module.MODEL}: {data.note}"
-    settings = f"\u03b2 = {args.beta:g}, S\u2080 = {args.S0:g}"
+    weight = f"{args.S0:g}" if args.S0_relative is None else f"{args.S0_relative:g} relative"
+    settings = f"\u03b2 = {args.beta:g}, S\u2080 = {weight}"
     if len({run.filter for run in runs}) == 1:
         settings += f", C(s) = {runs[0].filter}"
     if args.data_plot:

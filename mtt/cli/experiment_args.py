@@ -157,7 +157,15 @@ def register(commands) -> None:
         "--k0", type=float, nargs="+", required=True, metavar="V", help="initial estimate(s)"
     )
     group.add_argument("--beta", type=float, default=0.1, help="forgetting factor (default 0.1)")
-    group.add_argument("--S0", type=float, default=1e-4, help="initial weight (default 1e-4)")
+    weight = group.add_mutually_exclusive_group()
+    weight.add_argument("--S0", type=float, default=1e-4, help="initial weight (default 1e-4)")
+    weight.add_argument(
+        "--S0-relative",
+        type=float,
+        metavar="F",
+        help="S0 relative to the data: F times their cost's curvature at k0 per unit of time "
+        "(the prior weighs as much as F time units of data; 1e-4 suits most records)",
+    )
     _filter_options(group, several=True, default="(1 + s)^(n+1)")
     group.add_argument(
         "--engine",
