@@ -314,7 +314,7 @@ def filter_states(t, w, *, C=None, hold: str = "linear") -> np.ndarray:
     return _responses(A, B, t, w, (hold,))[0]
 
 
-# Test signals: inputs for experiments, and output noise at a signal-to-noise ratio -----------------
+# Test signals: inputs for experiments, and output noise at a signal-to-noise ratio -------------
 
 SIGNALS = ("step", "prbs", "square", "multisine")
 
@@ -346,7 +346,9 @@ def input_signal(kind: str, t, *, amplitude: float = 1.0, period: float | None =
     if kind == "prbs":
         count = int(math.floor(elapsed[-1] + 1e-9)) + 1
         if count > 1 << 24:
-            raise ValueError(f"a PRBS switching every {period:g} over {span:g} is too long: use a longer period")
+            raise ValueError(
+                f"a PRBS switching every {period:g} over {span:g} is too long: use a longer period"
+            )
         bits = max(4, math.ceil(math.log2(count + 1)))
         state = np.random.default_rng(seed).integers(0, 2, bits)
         state[0] |= not state.any()
@@ -1663,7 +1665,8 @@ def _filtered_moments(c, t, W, holds, needs, beta: float = 0.0) -> np.ndarray:
     else:  # one Gram matrix per distinct step
         for lo in range(0, V.shape[0], 4096):
             part = V[lo : lo + 4096]
-            np.add.at(block[:, :d, d:], steps.index[lo : lo + 4096], part[:, :, None] * part[:, None, :])
+            outer = part[:, :, None] * part[:, None, :]
+            np.add.at(block[:, :d, d:], steps.index[lo : lo + 4096], outer)
     E = linalg.expm(block * steps.values[:, None, None])
     M = (np.swapaxes(E[:, d:, d:], 1, 2) @ E[:, :d, d:]).sum(0)
     S = _derivatives(c, needs)
@@ -1705,9 +1708,10 @@ class Moments:
             self.k is not None and self.k != other.k
         ):
             raise ValueError("only the moments of one kind of step (the same k) add")
-        both = (lambda a, b: None if a is None else a + b)
-        return Moments(self.XX + other.XX, both(self.ZX, other.ZX), both(self.ZZ, other.ZZ),
-                       self.k, self.samples + other.samples, self.nuisances + other.nuisances)  # fmt: skip
+        ZX = None if self.ZX is None else self.ZX + other.ZX
+        ZZ = None if self.ZZ is None else self.ZZ + other.ZZ
+        return Moments(self.XX + other.XX, ZX, ZZ, self.k, self.samples + other.samples,
+                       self.nuisances + other.nuisances)  # fmt: skip
 
     __radd__ = __add__
 
@@ -1756,7 +1760,8 @@ def _prefilter(Theta: np.ndarray, k: float, C) -> np.ndarray:
     roots = np.roots(a)
     if (roots.real >= 0).any():
         slowest = np.abs(roots).max() or 1.0
-        roots = np.where(roots.real >= 0, -np.maximum(np.abs(roots.real), 1e-6 * slowest) + 1j * roots.imag, roots)
+        mirrored = -np.maximum(np.abs(roots.real), 1e-6 * slowest) + 1j * roots.imag
+        roots = np.where(roots.real >= 0, mirrored, roots)
         a = np.real(np.poly(roots))
     f = a / a[0]
     return f if C is None else np.convolve(f, C / C[0])
@@ -1768,8 +1773,7 @@ def _record_moments(Theta, t, u, y, *, k, c, hold, offset, initial_state, beta, 
     first, last = _nuisance_needs(offset, initial_state)
     signals, holds, needs = [y, u], ("linear", hold), (n, m)
     if k is not None:
-        x = simulate(t, u, k, hold=hold, **known) if _stable(Theta, k) else _stabilised_output(Theta, t, u, k, hold)
-        signals.append(x)
+        signals.append(_model_output(Theta, t, u, k, hold, known))
         holds, needs = holds + ("linear",), needs + (n,)
         c = _prefilter(Theta, k, c)
     if last >= first:
@@ -1777,7 +1781,8 @@ def _record_moments(Theta, t, u, y, *, k, c, hold, offset, initial_state, beta, 
         holds, needs = holds + ("zoh",), needs + (last,)
     M = _filtered_moments(c, t, np.array(signals), holds, needs, beta)
     if last >= first:  # drop s^i 1/F for i < first (no offset), then project the rest out
-        keep = np.r_[np.arange(M.shape[0] - last - 1), M.shape[0] - last - 1 + np.arange(first, last + 1)]
+        start = M.shape[0] - last - 1  # where the unit step's derivatives begin
+        keep = np.r_[np.arange(start), start + np.arange(first, last + 1)]
         M = M[np.ix_(keep, keep)]
     p = n + m + 2
     M = _project_out(M, M.shape[0] - max(last - first + 1, 0))
@@ -1792,6 +1797,14 @@ def _record_moments(Theta, t, u, y, *, k, c, hold, offset, initial_state, beta, 
 def _stable(Theta: np.ndarray, k: float) -> bool:
     a = np.trim_zeros((Theta @ k ** np.arange(N + 1))[n::-1], "f")
     return a.size > 1 and bool((np.roots(a).real < 0).all())
+
+
+def _model_output(Theta, t, u, k, hold, known) -> np.ndarray:
+    """The model's noise-free output at k (`simulate`), or, where A(s, k) is unstable, that
+    of the stabilised model (`_stabilised_output`)."""
+    if _stable(Theta, k):
+        return simulate(t, u, k, hold=hold, **known)
+    return _stabilised_output(Theta, t, u, k, hold)
 
 
 def _stabilised_output(Theta, t, u, k, hold) -> np.ndarray:
@@ -1826,7 +1839,7 @@ def moments(t, u, y, *, k=None, C=None, hold: str = "linear", offset: bool = Tru
                            initial_state=bool(initial_state), beta=0.0, known=known)  # fmt: skip
 
 
-# What a fit is worth: the fitted output, residuals and the uncertainty of k ------------------------
+# What a fit is worth: the fitted output, residuals and the uncertainty of k --------------------
 #
 # At the estimate, the model's output with the record's nuisances is
 #     y^ = G(s, k^) u + (P(s) + c/s) / A(s, k^)      (initial state P, offset c),
@@ -1852,10 +1865,11 @@ class _Record:
     residuals: np.ndarray | None  # y - y^ (None: likewise)
     rss: float  # the residual sum of squares
     offset: float  # the output at rest with zero input: c / a0 (0 without offsets)
-    information: float  # |psi|^2, nuisances projected out (weighted)
-    spread: float  # sum of the squared weighted psi (the variance's numerator)
-    free_information: float  # |psi|^2 without projecting the nuisances out
-    influence: float  # least squares: sum of (dJ'/de_i)^2, per unit noise variance
+    # matrices over the unknowns (1 x 1 here; several unknowns make psi a column each):
+    information: np.ndarray  # psi^T W psi, nuisances projected out of psi (W: the weights)
+    spread: np.ndarray  # psi^T W^2 psi, likewise (the variance's numerator)
+    free_information: np.ndarray  # psi^T W psi without projecting the nuisances out
+    influence: np.ndarray  # least squares: G^T G, G_i = dJ'/de_i per unit noise (else 0)
     nuisances: int
     deviations: float  # sum (y - mean y)^2
     whiteness: float  # Ljung-Box statistic of the residuals
@@ -1895,12 +1909,13 @@ def _whiteness(r: np.ndarray) -> float:
     return float(r.size * (r.size + 2) * np.sum(rho**2 / (r.size - np.arange(1, lags + 1))))
 
 
-def _validate(Theta, record, k, *, method, c, hold, offset, initial_state, weights, known) -> _Record:
+def _validate(Theta, record, k, *, method, c, hold, offset, initial_state, weights,
+              known) -> _Record:  # fmt: skip
     """The record's fitted output, residuals and its sums for the uncertainty of k."""
     t, u, y = record
     first, last = _nuisance_needs(offset, initial_state)
     f = _prefilter(Theta, k, None)
-    x = simulate(t, u, k, hold=hold, **known) if _stable(Theta, k) else _stabilised_output(Theta, t, u, k, hold)
+    x = _model_output(Theta, t, u, k, hold, known)
     w = np.ones(t.size) if weights is None else weights
     Xi = _nuisance_columns(f, t, first, last) if last >= first else np.zeros((t.size, 0))
     root = np.sqrt(w)[:, None]
@@ -1912,23 +1927,24 @@ def _validate(Theta, record, k, *, method, c, hold, offset, initial_state, weigh
     a = (Theta @ powers)[: n + 1]
     Dy, Du = _filter_derivatives(f, t, [fitted, u], ("linear", hold), (n, m))
     scale = a[np.flatnonzero(a)[-1]] if a.any() else 1.0  # F = A / a_n
-    psi = -(Dy @ slope[: n + 1] + Du @ slope[n + 1 :]) / scale
-    projected = psi - Xi @ np.linalg.lstsq(root * Xi, root[:, 0] * psi, rcond=None)[0]
+    psi = -(Dy @ slope[: n + 1, None] + Du @ slope[n + 1 :, None]) / scale  # a column per unknown
+    projected = psi - Xi @ np.linalg.lstsq(root * Xi, root * psi, rcond=None)[0]
     offset_value = 0.0
     if first == 0 and a[0] != 0:  # c = nu[0] * a_n in A y - B u = ... + c/s (Xi scaled by a_n)
         offset_value = float(nu[0] * scale / a[0])
-    influence = 0.0
+    influence = np.zeros((1, 1))
     if method == "ls":
         influence = _ls_influence(Theta, t, u, y, k, c, hold, first, last, w)
     return _Record(
         fitted=fitted, residuals=residuals, rss=float(residuals @ residuals), offset=offset_value,
-        information=float(projected @ (w * projected)), spread=float(projected @ (w**2 * projected)),
-        free_information=float(psi @ (w * psi)), influence=influence, nuisances=Xi.shape[1],
+        information=projected.T @ (w[:, None] * projected),
+        spread=projected.T @ (w[:, None] ** 2 * projected),
+        free_information=psi.T @ (w[:, None] * psi), influence=influence, nuisances=Xi.shape[1],
         deviations=float(np.sum((y - y.mean()) ** 2)), whiteness=_whiteness(residuals),
     )  # fmt: skip
 
 
-def _ls_influence(Theta, t, u, y, k, c, hold, first, last, w) -> float:
+def _ls_influence(Theta, t, u, y, k, c, hold, first, last, w) -> np.ndarray:
     """sum_i (dJ'(k^)/de_i)^2: how much the noise sample e_i added to y moves the slope J' of
     the least-squares cost at k^, summed in square (J'' and sigma^2 give the variance).
 
@@ -1940,7 +1956,8 @@ def _ls_influence(Theta, t, u, y, k, c, hold, first, last, w) -> float:
     powers = k ** np.arange(N + 1)
     theta_k = Theta @ powers
     slope = Theta @ (np.arange(N + 1) * np.r_[0.0, powers[:-1]])
-    Dy, Du, Dn = _filter_derivatives(c, t, [y, u, np.ones_like(t)], ("linear", hold, "zoh"), (n, m, n))
+    signals = [y, u, np.ones_like(t)]
+    Dy, Du, Dn = _filter_derivatives(c, t, signals, ("linear", hold, "zoh"), (n, m, n))
     error = Dy @ theta_k[: n + 1] + Du @ theta_k[n + 1 :]
     phi = Dy @ slope[: n + 1] + Du @ slope[n + 1 :]
     if last >= first:
@@ -1949,11 +1966,13 @@ def _ls_influence(Theta, t, u, y, k, c, hold, first, last, w) -> float:
         error = error - Xi @ np.linalg.lstsq(root * Xi, root[:, 0] * error, rcond=None)[0]
         phi = phi - Xi @ np.linalg.lstsq(root * Xi, root[:, 0] * phi, rcond=None)[0]
     back = t[-1] + t[0] - t[::-1]  # the adjoint of a causal filter runs backwards in time
-    Rphi, Rerror = _filter_derivatives(c, back, [(w * phi)[::-1], (w * error)[::-1]], ("linear", "linear"), (n, n))
+    reversed_ = [(w * phi)[::-1], (w * error)[::-1]]
+    Rphi, Rerror = _filter_derivatives(c, back, reversed_, ("linear", "linear"), (n, n))
     g = (Rphi @ theta_k[: n + 1] + Rerror @ slope[: n + 1])[::-1]
     h = np.diff(t)
     share = 0.5 * (np.r_[h, 0.0] + np.r_[0.0, h])
-    return float(np.sum((g * share) ** 2))
+    G = (g * share)[:, None]  # a column per unknown
+    return G.T @ G
 
 
 # The batch fit: whole records, unbiased under output noise, with the uncertainty of k -------------
@@ -2277,7 +2296,10 @@ def _excitation(total: Moments, Theta: np.ndarray) -> float:
     """The reciprocal condition number of the instruments' moments (scaled to a unit
     diagonal), the one combination that vanishes identically left out."""
     ZZ = total.XX if total.ZZ is None else total.ZZ
-    Q = linalg.null_space((Theta @ total.k ** np.arange(N + 1))[None, :]) if total.k is not None else np.eye(ZZ.shape[0])
+    if total.k is None:
+        Q = np.eye(ZZ.shape[0])
+    else:
+        Q = linalg.null_space((Theta @ total.k ** np.arange(N + 1))[None, :])
     M = Q.T @ ZZ @ Q
     scale = np.sqrt(np.abs(np.diag(M)))
     if not (scale > 0).all():
@@ -2291,7 +2313,7 @@ def _residual_sum(Theta, record, k, settings) -> float:
     t, u, y = record
     first, last = _nuisance_needs(settings["offset"], settings["initial_state"])
     hold, known = settings["hold"], settings["known"]
-    x = simulate(t, u, k, hold=hold, **known) if _stable(Theta, k) else _stabilised_output(Theta, t, u, k, hold)
+    x = _model_output(Theta, t, u, k, hold, known)
     if last >= first:
         Xi = _nuisance_columns(_prefilter(Theta, k, None), t, first, last)
         x = x + Xi @ np.linalg.lstsq(Xi, y - x, rcond=None)[0]
@@ -2343,7 +2365,9 @@ def _finish(Theta, records, shapes, k, coefficients, *, method, c, iterations, b
                   bounds=bounds, filter=c, hold=settings["hold"], known=dict(settings["known"]))  # fmt: skip
     if not np.isfinite(k):
         if not (coefficients[1:] != 0).any():
-            message = f"the data carry no information about {UNKNOWN}: the criterion does not depend on k"
+            message = (
+                f"the data carry no information about {UNKNOWN}: the criterion does not depend on k"
+            )
         else:
             message = "the criterion decreases without bound: bound the search with bounds=(lo, hi)"
         return _issued(Fit(math.nan, math.inf, (math.nan, math.nan), ok=False, message=message,
@@ -2356,17 +2380,20 @@ def _finish(Theta, records, shapes, k, coefficients, *, method, c, iterations, b
         rss = sum(part.rss for part in parts)
         dof = count - sum(part.nuisances for part in parts) - 1
         variance = rss / dof if dof > 0 else math.nan
-        information = sum(part.information for part in parts)
-        if method == "iv":
-            k_var = variance * sum(part.spread for part in parts) / information**2
-        else:
+        information = sum(part.information for part in parts)  # matrices over the unknowns
+        if method == "iv":  # the output-error covariance (a sandwich, for the weights)
+            bread, meat = information, sum(part.spread for part in parts)
+        else:  # least squares: J'' around how the noise moves J'
             curvature = _value(coefficients[2:] * np.arange(2, 2 * N + 1) * np.arange(1, 2 * N), k)
-            k_var = variance * sum(part.influence for part in parts) / curvature**2
-        k_se = math.sqrt(k_var) if k_var >= 0 else math.nan
+            bread, meat = np.atleast_2d(curvature), sum(part.influence for part in parts)
+        identifiable = bool(np.all(np.linalg.eigvalsh(information) > 0))
+        inverse = np.linalg.pinv(bread)
+        covariance = variance * inverse @ meat @ inverse.T
+        k_se = math.sqrt(covariance[0, 0]) if covariance[0, 0] >= 0 else math.nan
         deviations = sum(part.deviations for part in parts)
         fit_percent = 100.0 * (1.0 - math.sqrt(rss / deviations)) if deviations > 0 else math.nan
     ok, message = True, f"{method}: k = {k:.6g} +- {k_se:.3g} (standard error)"
-    if not (information > 0 and np.isfinite(k_se)):
+    if not (identifiable and np.isfinite(k_se)):
         ok, k_se = False, math.inf
         message = f"{UNKNOWN} is not identifiable from these data: the output does not depend on it"
     elif k_se > POORLY_DETERMINED * abs(k):
@@ -2375,10 +2402,10 @@ def _finish(Theta, records, shapes, k, coefficients, *, method, c, iterations, b
             f"{100 * k_se / abs(k) if k else math.inf:.3g} % of k (the criterion is nearly flat "
             "in k); a longer record or a richer input (a PRBS, a multisine) would help"
         )
-    free = sum(part.free_information for part in parts)
-    if nuisances and not idle and 0 < information < 0.01 * free:
+    share = float(information[0, 0] / sum(part.free_information for part in parts)[0, 0])
+    if nuisances and not idle and 0 < share < 0.01:
         found.append(
-            f"the offset and initial state take {100 * (1 - information / free):.3g} % of the "
+            f"the offset and initial state take {100 * (1 - share):.3g} % of the "
             f"information about {UNKNOWN} (the input's response looks like theirs, as a step "
             "at the first sample does); if the record starts at rest and without offset, fit "
             "with offset=False, initial_state=False"
@@ -2423,7 +2450,8 @@ def _finish(Theta, records, shapes, k, coefficients, *, method, c, iterations, b
     spread = math.sqrt(deviations / count)
     whiteness = sum(part.whiteness for part in parts)
     lags = WHITENESS_LAGS * len(parts)
-    if ok and math.sqrt(rss / count) > CLEAN * spread and whiteness > lags + WHITENESS_LEVEL * math.sqrt(2 * lags):
+    noisy = math.sqrt(rss / count) > CLEAN * spread  # not noise-free data (its rounding)
+    if ok and noisy and whiteness > lags + WHITENESS_LEVEL * math.sqrt(2 * lags):
         found.append(
             f"the residuals are far from white (Ljung-Box Q = {whiteness:.3g} over {lags} lags, "
             f"about {lags} if white): the model, the hold, an offset or the noise is not as "
@@ -2533,14 +2561,16 @@ def read_csv(path, columns: tuple[str, ...] = ("t", "u", "y")) -> tuple[np.ndarr
     except csv.Error as error:
         raise ValueError(f"{path}: not a CSV file: {error}") from None
     if not rows:
-        raise ValueError(f"{path}: the file is empty; expected a header row naming {', '.join(columns)}")
+        expected = ", ".join(columns)
+        raise ValueError(f"{path}: the file is empty; expected a header row naming {expected}")
     header = [name.strip() for name in rows[0][1]]
     repeated = sorted({name for name in header if header.count(name) > 1})
     if repeated:
         raise ValueError(f"{path}:{rows[0][0]}: the header names the column {repeated[0]!r} twice")
     missing = [name for name in columns if name not in header]
     if missing:
-        raise ValueError(f"{path}:{rows[0][0]}: no column {missing[0]!r} (the header names {', '.join(header)})")
+        named = ", ".join(header)
+        raise ValueError(f"{path}:{rows[0][0]}: no column {missing[0]!r} (the header names {named})")
     if len(rows) == 1:
         raise ValueError(f"{path}: no data: the file has a header row and nothing after it")
     index = [header.index(name) for name in columns]
@@ -2624,10 +2654,10 @@ def _column_names(text: str) -> tuple[str, str, str]:
 def _fit_main(args, known) -> tuple[dict, list[str], int]:
     columns = _column_names(args.columns)
     records = [read_csv(path, columns) for path in args.data]
-    result = fit(*([list(part) for part in zip(*records, strict=True)] if len(records) > 1 else records[0]),
-                 method=args.method, C=_filter_option(args), k0=args.k0, bounds=args.bounds,
-                 offset=args.offset, initial_state=args.initial_state, hold=args.hold,
-                 beta=args.beta, **known)  # fmt: skip
+    data = [list(part) for part in zip(*records, strict=True)] if len(records) > 1 else records[0]
+    result = fit(*data, method=args.method, C=_filter_option(args), k0=args.k0,
+                 bounds=args.bounds, offset=args.offset, initial_state=args.initial_state,
+                 hold=args.hold, beta=args.beta, **known)  # fmt: skip
     record = fit_record(result)
     lines = [
         f"{UNKNOWN} = {result.k:.6g} +- {result.k_se:.3g} (95 % interval {result.ci[0]:.6g} to "
@@ -2691,7 +2721,9 @@ def main(argv: list[str] | None = None) -> int:
             run = _fit_main if args.command == "fit" else _estimate_main
             record, lines, status = run(args, known)
     except (OSError, ValueError) as error:
-        text = f"{error.filename}: {error.strerror}" if isinstance(error, OSError) and error.filename else error
+        text = error
+        if isinstance(error, OSError) and error.filename:
+            text = f"{error.filename}: {error.strerror}"
         if args.json:
             print(json.dumps(dict(ok=False, model=MODEL, unknown=UNKNOWN, error=str(text))))
         print(f"{prog}: error: {text}", file=sys.stderr)
