@@ -1,0 +1,390 @@
+"""fit_many and estimate_many: one model, many records, on this machine's cores or a cluster.
+
+The records are cut into chunks; each chunk goes to a worker with the generated module's
+source (see worker.py). Per record, the worker runs the module's `fit` (or `estimate`) and
+returns its result without the per-sample signals. Pooled, the module's `fit_records`
+runs here over `Pooled`, whose answers (moments, validation sums) are summed over chunks
+that workers compute where the records are: each step of the fit is one round trip of
+small matrices, and the steps themselves are the module's, not repeated here.
+"""
+
+from __future__ import annotations
+
+import glob
+import math
+import sys
+from collections.abc import Callable, Iterator, Mapping
+from concurrent.futures import Executor
+from dataclasses import dataclass
+from pathlib import Path
+from types import ModuleType
+
+from mtt.batch import run, worker
+from mtt.language.diagnostics import MttError
+
+CHUNK = 32  # records per chunk at most
+CHUNKS = 64  # a batch of known size is cut into about this many chunks (few: small ones)
+STREAMED_CHUNK = 8  # records per chunk when their number is not known in advance
+
+
+@dataclass(frozen=True)
+class Outcome:
+    """One record's result: `result` the module's Fit (or Estimate) without its per-sample
+    signals, None where the record failed; `error` why there is no estimate (the record could
+    not be read, its fit raised, or the fit found no estimate: then `result` says more);
+    `seconds` the worker's CPU time on it (reading included). Pooled, `result` is None."""
+
+    name: str
+    result: object | None
+    error: str | None
+    seconds: float = 0.0
+
+    @property
+    def ok(self) -> bool:
+        return self.error is None
+
+    def record(self) -> dict:
+        """The JSON record of `mtt fit --json` for many records (k a list once it is a vector)."""
+        result = None if self.error is not None else self.result
+        return {
+            "file": self.name,
+            "k": _plain(getattr(result, "k", None)),
+            "k_se": _plain(getattr(result, "k_se", None)),
+            "fit_percent": _plain(getattr(result, "fit_percent", None)),
+            "warnings": list(getattr(self.result, "warnings", ()) or ()),
+            "error": self.error,
+        }
+
+
+def _plain(value):
+    """A float for JSON (None for none or not finite), a list of them for an array."""
+    if value is None:
+        return None
+    if hasattr(value, "tolist") and getattr(value, "ndim", 0) > 0:
+        return [_plain(v) for v in value.tolist()]
+    value = float(value)
+    return value if math.isfinite(value) else None
+
+
+@dataclass(frozen=True)
+class Batch:
+    """The outcomes of a batch, one per record in the records' order; `pooled` the Fit over
+    all the records that could be read (pooled=True), else None. Iterating a Batch gives the
+    outcomes."""
+
+    outcomes: tuple[Outcome, ...]
+    pooled: object | None = None
+
+    def __iter__(self) -> Iterator[Outcome]:
+        return iter(self.outcomes)
+
+    def __len__(self) -> int:
+        return len(self.outcomes)
+
+    def __getitem__(self, index: int) -> Outcome:
+        return self.outcomes[index]
+
+    @property
+    def errors(self) -> tuple[Outcome, ...]:
+        return tuple(outcome for outcome in self.outcomes if not outcome.ok)
+
+    @property
+    def ok(self) -> bool:
+        return not self.errors and (self.pooled is None or bool(self.pooled.ok))
+
+
+# the model: the module the results belong to, and its source for the workers -------------
+
+
+@dataclass(frozen=True)
+class Estimator:
+    module: ModuleType
+    source: str
+    name: str  # the module's name in every process (the source's hash)
+
+
+def estimator(model) -> Estimator:
+    """A Model (mtt.load), a model file (.bg), a generated module's file (.py), or a
+    generated module imported from its file."""
+    from mtt.api.model import Model, load
+    from mtt.estimator import codegen
+
+    if isinstance(model, str | Path) and str(model).endswith(".py"):
+        source = Path(model).read_text(encoding="utf-8")
+        name = worker.module_name(source)
+        return Estimator(worker.module_for(name, source), source, name)
+    if isinstance(model, str | Path):
+        model = load(model)
+    if isinstance(model, Model):
+        source = codegen.render(model._checked_theta())
+        module = model.estimator()
+    elif isinstance(model, ModuleType) and hasattr(model, "fit_records"):
+        path = getattr(model, "__file__", None)
+        if not path or not Path(path).is_file():
+            raise MttError(
+                f"the module {model.__name__} has no source file to send to workers: pass the "
+                "Model (mtt.load) or the model file instead",
+                kind="bad_argument",
+            )
+        source, module = Path(path).read_text(encoding="utf-8"), model
+    else:
+        raise MttError(
+            "model must be a Model (mtt.load), a model file, or a generated estimator module "
+            f"(or its .py file), not {type(model).__name__}",
+            kind="bad_argument",
+        )
+    name = worker.module_name(source)
+    sys.modules.setdefault(name, module)  # results pickled by workers come back as its classes
+    return Estimator(sys.modules[name], source, name)
+
+
+# the records ----------------------------------------------------------------------------
+
+
+def records_of(records) -> Iterator[tuple[str, object]]:
+    """(name, spec) per record: a path (a str or Path; a str with a pattern such as
+    "logs/*.csv" is expanded, sorted), a (t, u, y) triple (named "record i"), a pair
+    (name, (t, u, y)), or a mapping name -> (t, u, y)."""
+    if isinstance(records, str | Path):
+        records = [records]
+    elif isinstance(records, Mapping):
+        records = list(records.items())
+    for i, record in enumerate(records):
+        if isinstance(record, Path):
+            yield str(record), str(record)
+        elif isinstance(record, str):
+            yield from ((path, path) for path in expand(record))
+        elif isinstance(record, tuple | list) and len(record) == 2 and isinstance(record[0], str):
+            yield record[0], tuple(record[1])
+        elif isinstance(record, tuple | list) and len(record) == 3:
+            yield f"record {i}", tuple(record)
+        else:
+            raise MttError(
+                f"record {i}: expected a path, (t, u, y) or (name, (t, u, y)), not "
+                f"{type(record).__name__}",
+                kind="bad_argument",
+            )
+
+
+def expand(pattern: str) -> list[str]:
+    """A path, or the sorted paths that a glob pattern matches (none: an error)."""
+    if not glob.has_magic(pattern):
+        return [pattern]
+    paths = sorted(glob.glob(pattern, recursive=True))
+    if not paths:
+        raise MttError(f"no file matches {pattern!r}", kind="io", file=pattern)
+    return paths
+
+
+def _chunks(specs: list | Iterator, size: int | None) -> Iterator[run.Chunk]:
+    if size is None:
+        size = (
+            max(1, min(CHUNK, math.ceil(len(specs) / CHUNKS)))
+            if isinstance(specs, list)
+            else STREAMED_CHUNK
+        )
+    elif not (isinstance(size, int) and size >= 1):
+        raise MttError(f"chunk_size must be a whole number >= 1, not {size!r}", kind="bad_value")
+    items: list = []
+    number = 0
+    for position, (name, spec) in enumerate(specs):
+        items.append((position, name, spec))
+        if len(items) == size:
+            yield run.Chunk(number, items)
+            number, items = number + 1, []
+    if items:
+        yield run.Chunk(number, items)
+
+
+# the executors ----------------------------------------------------------------------------
+
+
+def runner(executor, jobs: int | None) -> run._Runner:
+    """Where the chunks run: executor (a concurrent.futures Executor or a dask Client), or
+    jobs processes (None: one per core; 1: this process)."""
+    if executor is not None:
+        if jobs is not None:
+            raise MttError("give an executor or jobs, not both", kind="bad_argument")
+        if run.is_dask_client(executor):
+            return run.Dask(executor)
+        if isinstance(executor, Executor):
+            return run.Futures(executor, own=False)
+        raise MttError(
+            "executor must be a concurrent.futures.Executor or a dask.distributed.Client, not "
+            f"{type(executor).__name__}",
+            kind="bad_argument",
+        )
+    jobs = run.default_jobs() if jobs is None else jobs
+    if not (isinstance(jobs, int) and jobs >= 1):
+        raise MttError(f"jobs must be a whole number >= 1, not {jobs!r}", kind="bad_value")
+    return run.InProcess() if jobs == 1 else run.Futures(run.process_pool(jobs), own=True)
+
+
+Progress = Callable[[int, int | None], None]  # (records done, records in all or None)
+
+
+def _each(found: Estimator, records, action: str, executor, jobs, columns, chunk_size,
+          progress, options) -> Batch:  # fmt: skip
+    specs = records_of(records)
+    specs = list(specs) if isinstance(records, list | tuple | Mapping | str | Path) else specs
+    total = len(specs) if isinstance(specs, list) else None
+    pool = runner(executor, jobs)
+    source = pool.share(found.source) if isinstance(pool, run.Dask) else found.source
+    outcomes: dict[int, Outcome] = {}
+
+    def call(chunk: run.Chunk):
+        return worker.run, (found.name, source, action, chunk.items, tuple(columns), options)
+
+    try:
+        for chunk, result in pool.results(_chunks(specs, chunk_size), call):
+            names = {position: name for position, name, _ in chunk.items}
+            if isinstance(result, run.Died):
+                ((position, name, _),) = chunk.items
+                outcomes[position] = Outcome(name, None, str(result))
+            else:
+                for position, value, error, seconds in result:
+                    if error is None and not value.ok:
+                        error = value.message
+                    outcomes[position] = Outcome(names[position], value, error, seconds)
+            if progress is not None:
+                progress(len(outcomes), total)
+    finally:
+        pool.close()
+    return Batch(tuple(outcomes[position] for position in sorted(outcomes)))
+
+
+def fit_many(model, records, *, executor=None, jobs: int | None = None, pooled: bool = False,
+             columns=("t", "u", "y"), chunk_size: int | None = None,
+             progress: Progress | None = None, **fit_options) -> Batch:  # fmt: skip
+    """The generated module's `fit` on each record (or, pooled=True, one fit over them all).
+
+    model: a Model (mtt.load), a model file, or a generated module (or its .py file).
+    records: paths (CSV with the named `columns`, or Parquet with pandas installed; a str
+    pattern such as "logs/*.csv" is expanded, sorted), (t, u, y) arrays, (name, (t, u, y))
+    pairs, or a mapping name -> (t, u, y); an iterator of them is read as the work goes.
+    executor: a concurrent.futures.Executor or a dask.distributed.Client; else `jobs`
+    processes (default: one per core; jobs=1 runs here). fit_options: the module's `fit`
+    options (method, C, k0, bounds, offset, initial_state, hold, beta, known parameters).
+
+    The outcomes keep the records' names and order; a record that fails is an error of its
+    own and the others go on. Each record's numbers are the same wherever it runs (BLAS on
+    one thread everywhere). pooled=True: the records' moments add into one estimate, each
+    step computed by the workers where the records are (a record that cannot be read or is
+    too short is an error and left out); the same as `fit` given them all as a list.
+    """
+    found = estimator(model)
+    _check_fit_options(found.module, fit_options)
+    if pooled:
+        return _pooled(found, records, executor, jobs, columns, chunk_size, progress, fit_options)
+    return _each(found, records, "fit", executor, jobs, columns, chunk_size, progress,
+                 fit_options)  # fmt: skip
+
+
+def estimate_many(model, records, *, executor=None, jobs: int | None = None,
+                  columns=("t", "u", "y"), chunk_size: int | None = None,
+                  progress: Progress | None = None, trajectories: bool = False,
+                  **estimate_options) -> Batch:  # fmt: skip
+    """The generated module's recursive `estimate` (the paper's tracker) on each record, as
+    `fit_many` runs `fit` (estimate_options: k0 and the others of `estimate`). Each
+    Estimate is kept at its last sample (k, global_k, minima and the cost there), unless
+    trajectories=True brings back k^(t) at every sample."""
+    return _each(estimator(model), records, "estimate", executor, jobs, columns, chunk_size,
+                 progress, {**estimate_options, "trajectories": bool(trajectories)})  # fmt: skip
+
+
+class _OptionsChecked(Exception):
+    pass
+
+
+class _NoRecords:
+    def shapes(self):
+        raise _OptionsChecked
+
+
+def _check_fit_options(module, options: dict) -> None:
+    """The module's own checks of fit's options, once, before any record is sent: fit_records
+    checks them before it asks the records anything."""
+    try:
+        module.fit_records(_NoRecords(), **options)
+    except _OptionsChecked:
+        return
+    except (TypeError, ValueError) as error:
+        raise MttError(str(error), kind="bad_argument") from None
+
+
+# pooled -------------------------------------------------------------------------------------
+
+
+class Pooled:
+    """The module's Records protocol over chunks of records that workers hold: each answer
+    is the sum of the chunks' answers in chunk order (the same chunks give the same sums
+    wherever they run). Made, it has read the records once: `errors` (position -> message)
+    are those that could not be read or are too short, left out of every later step."""
+
+    def __init__(self, found: Estimator, pool: run._Runner, specs: list, chunk_size, columns,
+                 progress: Progress | None, offset: bool, initial_state: bool):  # fmt: skip
+        self.found, self.pool, self.columns, self.progress = found, pool, tuple(columns), progress
+        self.source = pool.share(found.source) if isinstance(pool, run.Dask) else found.source
+        self.chunks = list(_chunks(specs, chunk_size))
+        self.held = {  # each chunk's records read where they stay (None: read at each step)
+            chunk.number: pool.hold(worker.load, (found.name, self.source, chunk.items,
+                                                  self.columns, offset, initial_state))
+            for chunk in self.chunks
+        }  # fmt: skip
+        self.rounds = 0
+        self.errors: dict[int, str] = {}
+        self._shapes: list = []
+        for _, shapes, errors in self._ask("shapes", (offset, initial_state)):
+            self._shapes += shapes
+            self.errors.update(errors)
+        self.chunks = [
+            run.Chunk(chunk.number, [item for item in chunk.items if item[0] not in self.errors])
+            for chunk in self.chunks
+        ]
+        self.chunks = [chunk for chunk in self.chunks if chunk.items]
+
+    def _ask(self, method: str, args: tuple) -> list:
+        def call(chunk: run.Chunk):
+            held = None if chunk.suspect else self.held.get(chunk.number)
+            held = list(chunk.items) if held is None else held
+            return worker.pooled, (self.found.name, self.source, held, self.columns, method, args)
+
+        answers: dict[int, list] = {}
+        for chunk, answer in self.pool.results(
+            [run.Chunk(c.number, c.items) for c in self.chunks], call
+        ):
+            if isinstance(answer, run.Died):
+                raise MttError(f"{chunk.items[0][1]}: {answer}", kind="worker_died")
+            answers.setdefault(chunk.number, []).append(answer)
+        self.rounds += 1
+        if self.progress is not None:
+            self.progress(self.rounds, None)
+        return [answer for number in sorted(answers) for answer in answers[number]]
+
+    def shapes(self) -> list:
+        return self._shapes
+
+    def moments(self, *args):
+        return sum(self._ask("moments", args))
+
+    def validate(self, *args) -> list:
+        return [part for parts in self._ask("validate", args) for part in parts]
+
+    def residual_sum(self, *args) -> float:
+        return sum(self._ask("residual_sum", args))
+
+
+def _pooled(found: Estimator, records, executor, jobs, columns, chunk_size, progress,
+            options) -> Batch:  # fmt: skip
+    specs = list(records_of(records))
+    pool = runner(executor, jobs)
+    try:
+        nuisances = bool(options.get("offset", True)), bool(options.get("initial_state", True))
+        steps = Pooled(found, pool, specs, chunk_size, columns, progress, *nuisances)
+        result = found.module.fit_records(steps, keep=False, **options) if steps.shapes() else None
+    finally:
+        pool.close()
+    outcomes = tuple(
+        Outcome(name, None, steps.errors.get(position)) for position, (name, _) in enumerate(specs)
+    )
+    return Batch(outcomes, result)
