@@ -30,6 +30,10 @@ def __getattr__(name: str):
         from mtt import api
 
         return getattr(api, name)
+    if name == "batch":  # mtt.batch.fit_many: many records on many cores (docs/batch.md)
+        import importlib
+
+        return importlib.import_module("mtt.batch")
     raise AttributeError(f"module 'mtt' has no attribute {name!r}")
 
 

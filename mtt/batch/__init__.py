@@ -6,10 +6,20 @@ on this machine's cores (concurrent.futures) or on a dask.distributed cluster.
     for outcome in batch:
         print(outcome.name, outcome.error or outcome.result.k)
 
-See docs/batch.md. The workers receive the generated module's source and need only numpy
-and scipy (and pandas for Parquet records).
+See docs/batch.md. Worker processes import only mtt.batch.worker (the standard library);
+the estimator reaches them as source. So this package imports its API when first used.
 """
 
-from mtt.batch.api import Batch, Outcome, estimate_many, fit_many
-
 __all__ = ["Batch", "Outcome", "estimate_many", "fit_many"]
+
+
+def __getattr__(name: str):
+    if name in __all__:
+        from mtt.batch import api
+
+        return getattr(api, name)
+    raise AttributeError(f"module 'mtt.batch' has no attribute {name!r}")
+
+
+def __dir__() -> list[str]:
+    return sorted({*globals(), *__all__})

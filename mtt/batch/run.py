@@ -162,7 +162,8 @@ class Futures(_Runner):
         self.broken = False
         if self.own:
             self.executor.shutdown(wait=False, cancel_futures=True)
-        self.executor, self.own = process_pool(self.workers), True
+        context = getattr(self.executor, "_mp_context", None)  # a pool like the broken one
+        self.executor, self.own = ProcessPoolExecutor(self.workers, mp_context=context), True
 
     def close(self) -> None:
         if self.own:
@@ -189,23 +190,21 @@ def is_dask_client(executor: object) -> bool:
 
 
 class Dask(_Runner):
-    """Chunks on a dask.distributed cluster, through a Client. The worker code travels by
-    value (cloudpickle), so that workers need numpy and scipy but not mtt. Dask itself runs
-    again the tasks of a worker that died; a chunk it gives up on (KilledWorker) is sent
-    again as above."""
+    """Chunks on a dask.distributed cluster, through a Client. The workers import mtt's
+    worker module alone (standard library only; the estimator arrives as source). Dask
+    itself runs again the tasks of a worker that died; a chunk it gives up on
+    (KilledWorker) is sent again as above."""
 
     def __init__(self, client):
-        import cloudpickle
         from distributed import as_completed
 
-        cloudpickle.register_pickle_by_value(worker)
         self.client = client
         self.workers = max(sum(client.nthreads().values()), 1)
         self.pending = as_completed(loop=client.loop)
 
     def share(self, value):
         """A future of `value` on the cluster (recomputed there if the workers holding it die)."""
-        return self.client.submit(_same, value, pure=False)
+        return self.client.submit(worker.same, value, pure=False)
 
     def hold(self, function, args):
         return self.client.submit(function, *args, pure=False)
@@ -223,7 +222,3 @@ class Dask(_Runner):
             return [(future, future.result(), None)]
         except (KilledWorker, CancelledError) as error:
             return [(future, None, f"{type(error).__name__}: {error}")]
-
-
-def _same(value):
-    return value

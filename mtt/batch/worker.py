@@ -6,8 +6,7 @@ module's results (Fit, Moments, ...) pickle by that name, and the caller registe
 copy of the module under the same name, so that they come back as its classes.
 
 This file needs only the standard library and what the generated module needs (numpy and
-scipy); pandas for Parquet records. On a dask cluster it travels by value (see
-mtt.batch.run), so that workers need not have mtt installed.
+scipy; pandas for Parquet records): importing it is all a worker process does of mtt.
 """
 
 from __future__ import annotations
@@ -31,6 +30,11 @@ _READ: OrderedDict = OrderedDict()
 
 def module_name(source: str) -> str:
     return PREFIX + hashlib.sha256(source.encode("utf-8")).hexdigest()[:20]
+
+
+def same(value):
+    """value itself (a task whose result the cluster keeps, and can make again)."""
+    return value
 
 
 def module_for(name: str, source: str) -> types.ModuleType:
