@@ -7,6 +7,7 @@ killed mid-run costs nothing but time; the workers import mtt's worker module al
 
 from __future__ import annotations
 
+import json
 import sys
 import warnings
 
@@ -78,3 +79,21 @@ def test_a_killed_dask_worker_costs_only_time(dc_drive, logs, client):
         assert a.name == b.name and a.error == b.error
         assert a.result is b.result is None or same_numbers(a.result, b.result)
     client.wait_for_workers(2, timeout=60)  # the nanny restarts it, for the next tests
+
+
+def test_the_command_line_on_a_running_scheduler(capsys, logs, client, monkeypatch):
+    from mtt.cli import batch
+    from mtt.cli.main import main
+
+    monkeypatch.setattr(batch, "CONNECT_TIMEOUT", 0.5)
+    pattern = str(logs / "run_0[0-3].csv")
+    address = client.scheduler.address
+    statuses = [main(["fit", "models/dc_drive.bg", "--data", pattern, "--hold", "zoh", "--json",
+                      *where]) for where in ([], ["--scheduler", address])]  # fmt: skip
+    here, there = (json.loads(line) for line in capsys.readouterr().out.splitlines())
+    assert statuses == [0, 0] and here == there and len(here["records"]) == 4
+    assert (
+        main(["fit", "models/dc_drive.bg", "--data", pattern, "--scheduler", "tcp://127.0.0.1:1"])
+        == 2
+    )
+    assert "--scheduler tcp://127.0.0.1:1: cannot connect" in capsys.readouterr().err

@@ -103,16 +103,22 @@ class Estimator:
     name: str  # the module's name in every process (the source's hash)
 
 
+def from_source(source: str) -> Estimator:
+    """The generated module of this source text, imported here as the workers import it."""
+    name = worker.module_name(source)
+    return Estimator(worker.module_for(name, source), source, name)
+
+
 def estimator(model) -> Estimator:
     """A Model (mtt.load), a model file (.bg), a generated module's file (.py), or a
     generated module imported from its file."""
     from mtt.api.model import Model, load
     from mtt.estimator import codegen
 
+    if isinstance(model, Estimator):
+        return model
     if isinstance(model, str | Path) and str(model).endswith(".py"):
-        source = Path(model).read_text(encoding="utf-8")
-        name = worker.module_name(source)
-        return Estimator(worker.module_for(name, source), source, name)
+        return from_source(Path(model).read_text(encoding="utf-8"))
     if isinstance(model, str | Path):
         model = load(model)
     if isinstance(model, Model):

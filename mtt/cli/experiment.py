@@ -228,7 +228,11 @@ def _csv_text(header: list[str], rows) -> str:
 
 
 def _model(args) -> ModuleType:
-    module = codegen.load(pipeline.theta_for(args.file, choice_from_args(args)))
+    return checked_module(codegen.load(pipeline.theta_for(args.file, choice_from_args(args))))
+
+
+def checked_module(module: ModuleType) -> ModuleType:
+    """The module, if the model gives every kept parameter a value."""
     missing = [name for name, value in module.DEFAULTS.items() if value is None]
     if missing:
         name = missing[0]

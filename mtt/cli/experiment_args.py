@@ -10,6 +10,7 @@ from __future__ import annotations
 import argparse
 from collections.abc import Callable
 
+from mtt.cli import batch
 from mtt.cli.options import add_parameter_options
 
 DEFAULT_T_END, DEFAULT_DT, DEFAULT_SEED = 10.0, 0.01, 0
@@ -38,7 +39,8 @@ def _data_options(parser: argparse.ArgumentParser, measured: bool) -> None:
             metavar="FILE.csv",
             action="append",
             help="measured data: a CSV file with columns t,u,y (see --columns); `fit` takes "
-            "several, one per experiment, and combines them",
+            "several, one per experiment, and combines them, or glob patterns such as "
+            "'logs/*.csv' (many records: see below)",
         )
         group.add_argument(
             "--columns",
@@ -236,7 +238,10 @@ def register(commands) -> None:
         "--plot", metavar="FILE.png", help="plot measured and simulated output and the residuals"
     )
     outputs.add_argument(
-        "--csv", metavar="FILE", help="write t, u, y, the fitted output and the residual"
+        "--csv",
+        metavar="FILE",
+        help="write t, u, y, the fitted output and the residual (per record: the table)",
     )
     outputs.add_argument("--json", action="store_true", help="print the result as JSON")
+    batch.add_options(fit)
     fit.set_defaults(run=_implementation("cmd_fit", "fitting"))

@@ -32,6 +32,11 @@ def _filter(args):
 
 
 def cmd_fit(args) -> int:
+    from mtt.cli import batch
+
+    kind = batch.mode(args)  # --data patterns, --per-record, --jobs...: mtt.batch
+    if kind is not None:
+        return batch.cmd_fit_many(args, kind)
     module = _model(args)
     records = experiment_data(module, args, several=True)
     arrays = [[getattr(data, name) for data in records] for name in ("t", "u", "y")]

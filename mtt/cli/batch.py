@@ -1,0 +1,218 @@
+"""`mtt fit --data 'logs/*.csv' --jobs N`: many records, through mtt.batch.
+
+Which fit: each --data is a file or a glob pattern (expanded here, each pattern's matches
+sorted). Files named one by one are experiments of one pooled fit (their moments add), as
+`mtt fit` has always done; a pattern stands for a set of logs, each fitted on its own.
+--per-record and --pooled say it explicitly. --jobs N runs N worker processes and
+--scheduler ADDRESS a running dask.distributed cluster, in either mode; a pooled fit in
+this process is the plain `mtt fit` (fitting.py).
+"""
+
+from __future__ import annotations
+
+import argparse
+import glob
+import json
+import sys
+
+SHOWN_WARNINGS = 20  # per-record warnings printed on stderr before a count of the rest
+CONNECT_TIMEOUT = 10.0  # seconds to reach a --scheduler
+
+
+def add_options(parser: argparse.ArgumentParser) -> None:
+    """The fit command's options for many records (building the parser imports nothing
+    heavy: the rest of this module imports what it runs when it runs)."""
+    group = parser.add_argument_group(
+        "many records",
+        "--data takes glob patterns ('logs/*.csv'): each record is then fitted on its own "
+        "(files named one by one are combined into one fit); the options below choose",
+    )
+    mode = group.add_mutually_exclusive_group()
+    mode.add_argument(
+        "--per-record", action="store_true", help="fit each --data record on its own (a table)"
+    )
+    mode.add_argument(
+        "--pooled", action="store_true", help="fit all --data records together (moments add)"
+    )
+    where = group.add_mutually_exclusive_group()
+    where.add_argument(
+        "--jobs", type=int, metavar="N", help="worker processes (default 1: this process)"
+    )
+    where.add_argument(
+        "--scheduler",
+        metavar="ADDRESS",
+        help="run on a dask.distributed scheduler (tcp://host:8786; pip install 'mtt[dask]')",
+    )
+
+
+def mode(args) -> str | None:
+    """ "each" (per record), "pooled" (pooled by workers), or None (pooled here: fitting.py).
+    Expands the patterns of --data in place."""
+    from mtt.batch.api import expand
+    from mtt.cli.experiment import UsageError
+    from mtt.language.diagnostics import MttError
+
+    data = getattr(args, "data", None) or []
+    chosen = args.per_record or args.pooled or args.jobs is not None or args.scheduler
+    if not data:
+        if chosen:
+            raise UsageError("--per-record, --pooled, --jobs and --scheduler apply to --data")
+        return None
+    if args.jobs is not None and args.jobs < 1:
+        raise UsageError(f"--jobs must be at least 1, not {args.jobs}")
+    patterns = any(glob.has_magic(text) for text in data)
+    try:
+        args.data = [path for text in data for path in expand(text)]
+    except MttError as error:
+        raise UsageError(str(error)) from None
+    if args.per_record or (patterns and not args.pooled):
+        return "each"
+    return "pooled" if (args.jobs or 1) > 1 or args.scheduler else None
+
+
+def cmd_fit_many(args, kind: str) -> int:
+    from mtt.batch import api
+    from mtt.cli.experiment import EXIT_OK, EXIT_STOPPED, UsageError, _columns, checked_module
+    from mtt.cli.fitting import _filter
+    from mtt.cli.options import choice_from_args
+    from mtt.derivation import pipeline
+    from mtt.estimator import codegen
+    from mtt.language.diagnostics import MttError
+
+    if args.plot or (args.csv and kind == "pooled"):
+        flag = "--plot" if args.plot else "--csv"
+        raise UsageError(
+            f"{flag} draws the fitted outputs, which stay with the workers: "
+            + (
+                "fit the records in this process (no --jobs/--scheduler)"
+                if kind == "pooled"
+                else "fit one record, or pass --pooled without --jobs"
+            )  # fmt: skip
+        )
+    found = api.from_source(codegen.render(pipeline.theta_for(args.file, choice_from_args(args))))
+    module = checked_module(found.module)
+    options = dict(method=args.method, C=_filter(args), k0=args.k0, bounds=args.bounds,
+                   offset=args.offset, initial_state=args.initial_state, hold=args.hold,
+                   beta=args.beta)  # fmt: skip
+    client = _client(args.scheduler) if args.scheduler else None
+    try:
+        with _bar(len(args.data), kind) as bar:
+            batch = api.fit_many(
+                found, args.data, executor=client, jobs=None if client else (args.jobs or 1),
+                pooled=kind == "pooled", columns=_columns(args.columns),
+                progress=lambda done, total: bar.update(done - bar.n), **options,
+            )  # fmt: skip
+    except MttError as error:
+        raise UsageError(str(error)) from None
+    finally:
+        if client is not None:
+            client.close()
+    for outcome in batch.errors:  # one line each, naming the record
+        named = outcome.error.startswith(outcome.name)
+        print(f"mtt fit: error: {'' if named else outcome.name + ': '}{outcome.error}",
+              file=sys.stderr)  # fmt: skip
+    if kind == "pooled":
+        return _pooled(module, args, batch)
+    _warnings(batch)
+    if args.csv:
+        codegen.write_atomic(args.csv, _table_csv(batch))
+    if args.json:
+        print(json.dumps({"ok": batch.ok, "records": [o.record() for o in batch]}))
+    else:
+        print(_table(module, args, batch))
+    return EXIT_OK if batch.ok else EXIT_STOPPED
+
+
+def _client(address: str):
+    from mtt.cli.experiment import UsageError
+
+    try:
+        from distributed import Client
+    except ImportError:
+        raise UsageError("--scheduler needs dask.distributed: pip install 'mtt[dask]'") from None
+    try:
+        return Client(address, timeout=CONNECT_TIMEOUT)
+    except (OSError, TimeoutError, ValueError) as error:
+        raise UsageError(f"--scheduler {address}: cannot connect ({error})") from None
+
+
+def _bar(total: int, kind: str):
+    from tqdm import tqdm
+
+    tqdm.monitor_interval = 0  # no monitor thread: the process pool forks a single thread
+
+    if kind == "pooled":  # the fit's steps, each a round trip over all the records
+        return tqdm(desc="fitting (steps over all records)", unit="step", leave=False,
+                    disable=not sys.stderr.isatty(), delay=1.0)  # fmt: skip
+    return tqdm(total=total, desc="fitting", unit="record", leave=False,
+                disable=not sys.stderr.isatty(), delay=1.0)  # fmt: skip
+
+
+def _warnings(batch) -> None:
+    from mtt.cli.experiment import warn
+
+    lines = [
+        f"{o.name}: {text}" for o in batch if o.result is not None for text in o.result.warnings
+    ]
+    warn("fit", lines[:SHOWN_WARNINGS])
+    if len(lines) > SHOWN_WARNINGS:
+        warn("fit", [f"{len(lines) - SHOWN_WARNINGS} more warnings (--json or --csv lists them)"])
+
+
+def _pooled(module, args, batch) -> int:
+    from mtt.cli.experiment import EXIT_OK, EXIT_STOPPED, UsageError, warn
+    from mtt.cli.fitting import _text
+
+    if batch.errors or batch.pooled is None:  # as in this process: a bad record is an error
+        raise UsageError(f"{len(batch.errors)} of {len(batch)} records could not be fitted")
+    result = batch.pooled
+    warn("fit", result.warnings)
+    notes = [f"{outcome.name}" for outcome in batch]
+    if args.json:
+        record = {"model": module.MODEL, "unknown": module.UNKNOWN, **module.fit_record(result)}
+        record["data"] = notes
+        print(json.dumps(record))
+    else:
+        print(_text(module, [argparse.Namespace(note=note) for note in notes], result))
+    return EXIT_OK if result.ok else EXIT_STOPPED
+
+
+def _cells(outcome) -> tuple[str, ...]:
+    result = outcome.result
+    if outcome.error is not None:
+        return (outcome.name, "", "", "", "", "failed (the error is on stderr)")
+    return (outcome.name, f"{result.k:.6g}", f"{result.k_se:.3g}", f"{result.fit_percent:.4g}",
+            str(len(result.warnings) or ""), "")  # fmt: skip
+
+
+def _table(module, args, batch) -> str:
+    from mtt.cli.experiment import _rows
+
+    where = (f"on {args.scheduler}" if args.scheduler else
+             f"{args.jobs} processes" if (args.jobs or 1) > 1 else "in this process")  # fmt: skip
+    method = "refined instrumental variables" if args.method == "iv" else "least squares"
+    header = ("file", module.UNKNOWN, "k_se", "fit %", "warnings", "")
+    fitted = len(batch) - len(batch.errors)
+    return "\n".join([
+        f"{module.MODEL}: {len(batch)} records, one fit each ({method}, {where})",
+        *_rows([header, *(_cells(outcome) for outcome in batch)]),
+        f"  {fitted} of {len(batch)} records fitted" + (f"; {len(batch.errors)} failed"
+                                                         if batch.errors else ""),
+    ])  # fmt: skip
+
+
+def _table_csv(batch) -> str:
+    from mtt.cli.experiment import _csv_text
+
+    header = ["file", "k", "k_se", "ci_low", "ci_high", "fit_percent", "residual_rms",
+              "iterations", "warnings", "error"]  # fmt: skip
+    rows = []
+    for outcome in batch:
+        result = None if outcome.error else outcome.result
+        numbers = ("", "", "", "", "", "", "")
+        if result is not None:
+            numbers = (result.k, result.k_se, *result.ci, result.fit_percent,
+                       result.residual_rms, result.iterations)  # fmt: skip
+        warnings = " | ".join(outcome.result.warnings) if outcome.result is not None else ""
+        rows.append((outcome.name, *numbers, warnings, outcome.error or ""))
+    return _csv_text(header, rows)
