@@ -52,9 +52,12 @@ def test_a_changed_output_or_exit_status_is_reported(tmp_path):
         "```bg file=typo.bg\nmodel m\nSe:v -> 1:j -> R:r\n1:j -> Df:i\n```\n"
         "```console\n$ mtt check typo.bg\ntypo.bg: ok\n```\n"
         "```python\nprint(6 * 7)\n```\n```output\n41\n```\n"
+        "```python\nimport numpy\nnumpy.log(0.0)\n```\n"
     )
-    check, python = (result for result in run(markdown, tmp_path) if result.step.kind != "file")
+    results = [result for result in run(markdown, tmp_path) if result.step.kind != "file"]
+    check, python, warning = results
     assert check.status == 2 and not check.ok
     assert "error[undeclared_parameter]" in report(check)
     assert python.output == "42\n" and not python.ok
-    assert [step.kind for step in steps(markdown)] == ["file", "command", "python"]
+    assert warning.output == "RuntimeWarning: divide by zero encountered in log\n"
+    assert [step.kind for step in steps(markdown)] == ["file", "command", "python", "python"]

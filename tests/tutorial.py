@@ -8,7 +8,8 @@ The tutorial's fenced blocks that run, in the order they appear, in one director
                         `# exit status N` after a command: the status it ends with (else 0)
     ```python           code, run in one namespace shared by all the Python blocks
     ```output           what the Python block just above prints, then the warnings it
-                        issues (`Category: message`, one a line, as a notebook shows them)
+                        issues (`Category: message`, one a line: a notebook shows them;
+                        not those Python hides by default, such as DeprecationWarning)
 
 `mtt COMMAND ...` runs in this process (the command line's `main`, as the fuzz tests run it:
 the libraries are imported once), `python ...` in a child process with this interpreter.
@@ -50,6 +51,8 @@ IMAGES = "images/tutorial/"  # figures the tutorial shows, relative to docs/
 FENCE = re.compile(r"^```(?P<info>[^\n`]*)\n(?P<body>.*?)^```[ \t]*$", re.M | re.S)
 NUMBER = r"[-+]?(?:\d+\.\d*|\.\d+|\d+)(?:[eE][-+]?\d+)?"
 STATUS = re.compile(r"\s+# exit status (\d+)$")
+# The warnings Python hides by default; a notebook shows every other one, and so does `run`.
+HIDDEN = (DeprecationWarning, PendingDeprecationWarning, ImportWarning, ResourceWarning)
 
 
 @dataclass(frozen=True)
@@ -214,7 +217,7 @@ def _run_python(step: Step, namespace: dict) -> str:
     with warnings.catch_warnings(record=True) as caught, contextlib.redirect_stdout(captured):
         warnings.simplefilter("always")
         exec(code, namespace)  # noqa: S102 - the tutorial's own code, as a reader runs it
-    shown = [w for w in caught if issubclass(w.category, UserWarning)]
+    shown = [w for w in caught if not issubclass(w.category, HIDDEN)]
     return captured.getvalue() + "".join(f"{w.category.__name__}: {w.message}\n" for w in shown)
 
 
