@@ -22,7 +22,9 @@ functions of kept symbols such as sqrt(q)).
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
+from fractions import Fraction
 
 import sympy
 from sympy.polys.domains import QQ
@@ -194,3 +196,49 @@ class Constants:
     def variables(self) -> list[sympy.Expr]:
         """pi, e, the logarithms and the functions of symbols, in a fixed order."""
         return sorted(self.transcendental | self.functions, key=sympy.default_sort_key)
+
+
+# The determinants of a matrix over Q(theta), by integers: theta as one more variable t ----
+
+
+def over_integers(entries: dict, ring) -> tuple[dict, dict, object]:
+    """Polynomials over Q(theta) (a number field's elements are polynomials in theta of
+    degree below the field's) as polynomials over ZZ with one more variable t for theta,
+    each row scaled by the least common denominator of its rational numbers: the entries,
+    each row's scale, and the new ring. A determinant of them, reduced by `reduced`, is the
+    determinant over Q(theta) times the product of the scales."""
+    from sympy.polys.domains import ZZ
+    from sympy.polys.rings import PolyRing
+
+    integers = PolyRing((*ring.symbols, sympy.Dummy("theta")), ZZ)
+    rational: dict = {}
+    for (i, j), poly in entries.items():
+        terms = rational.setdefault(i, {}).setdefault(j, {})
+        for monom, coefficient in poly.terms():
+            for power, q in enumerate(reversed(coefficient.to_list())):
+                if q:
+                    terms[(*monom, power)] = Fraction(int(q.numerator), int(q.denominator))
+    scales, converted = {}, {}
+    for i, row in rational.items():
+        scales[i] = math.lcm(*(q.denominator for terms in row.values() for q in terms.values()))
+        for j, terms in row.items():
+            converted[(i, j)] = integers.from_dict(
+                {monom: int(q * scales[i]) for monom, q in terms.items()}
+            )
+    return converted, scales, integers
+
+
+def reduced(poly, ring):
+    """A polynomial over ZZ in `ring`'s variables and theta, as one over Q(theta) (`ring`'s
+    domain): every power of theta reduced by theta's minimal polynomial."""
+    field = ring.domain
+    theta = field.new([1, 0])
+    powers = [field.one]
+    terms: dict = {}
+    for monom, coefficient in poly.terms():
+        *rest, power = monom
+        while len(powers) <= power:
+            powers.append(powers[-1] * theta)
+        key = tuple(rest)
+        terms[key] = terms.get(key, field.zero) + field.convert(int(coefficient)) * powers[power]
+    return ring.from_dict({k: v for k, v in terms.items() if v})

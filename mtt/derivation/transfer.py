@@ -16,8 +16,10 @@ from math import gcd
 
 import sympy
 from sympy.polys.domains import ZZ
+from sympy.polys.matrices import DomainMatrix
 from sympy.polys.rings import PolyElement
 
+from mtt.derivation import constants
 from mtt.derivation.equations import Equations
 from mtt.language.diagnostics import ModelError, error
 from mtt.language.measures import MAX_DIGITS
@@ -83,30 +85,40 @@ def transfer_function(equations: Equations) -> TransferFunction:
     F, gens = _field(equations)
     lift = lambda M: M.to_sparse().convert_to(F)  # noqa: E731
     D = lift(equations.D)[0, 0].element
-    G = D
+    num, den = D.numer, D.denom
     size = len(equations.states)
     if size:
         pencil = lift(equations.E) * F.from_sympy(LAPLACE) - lift(equations.A)
         bordered = pencil.hstack(lift(equations.B)).vstack(
             (-lift(equations.C)).hstack(lift(equations.D))
         )
-        determinants = None
-        if _ground(equations).is_QQ:  # integer coefficients: by evaluation and interpolation
-            denominators, cleared = bordered.clear_denoms_rowwise(convert=True)
-            ring = cleared.domain
-            try:
-                determinants = bordered_determinants(cleared.to_dok(), size + 1, ring.ring)
-            except TooLarge as bits:
-                raise _too_large(equations, f"could have {int(bits.args[0] * 0.30103)}") from None
+        denominators, cleared = bordered.clear_denoms_rowwise(convert=True)
+        ring = cleared.domain
+        algebraic = not _ground(equations).is_QQ  # over Q(theta): theta as a variable
+        entries, scales, integers = cleared.to_dok(), {}, ring.ring
+        if algebraic:
+            entries, scales, integers = constants.over_integers(entries, ring.ring)
+        try:
+            determinants = bordered_determinants(entries, size + 1, integers)
+        except TooLarge as bits:
+            raise _too_large(equations, f"could have {int(bits.args[0] * 0.30103)}") from None
+        if determinants is None and algebraic:  # fraction-free, over the integers still
+            determinants = _bareiss(entries, size + 1, integers)
         if determinants is None:
             G = _solve(equations, F, pencil, lift(equations.B), lift(equations.C)) + D
+            num, den = G.numer, G.denom
         else:
             leading, full = determinants
+            if algebraic:
+                leading, full = (constants.reduced(p, ring.ring) for p in (leading, full))
             if not leading:
                 raise _singular(equations, ": det(sE - A) is identically zero")
-            last = F.convert(denominators.to_dok()[size, size])  # the last row's multiplier
-            G = F.convert_from(full, ring) / (F.convert_from(leading, ring) * last)
-    tf = _canonical(equations, gens, G)
+            # the last row's multipliers (the others' cancel between the two determinants)
+            last = denominators.to_dok()[size, size] * scales.get(size, 1)
+            num, den = full, leading * last
+            common = num.gcd(den)  # one gcd, in the ring (fractions would take several)
+            num, den = num.exquo(common), den.exquo(common)
+    tf = _canonical(equations, gens, num, den)
     digits = max((_digits(x) for p in (tf.num, tf.den) for x in _rationals((p,))), default=0)
     if digits > MAX_DIGITS:
         raise _too_large(equations, f"have {int(digits)}")
@@ -138,6 +150,16 @@ def _too_large(equations: Equations, have: str) -> ModelError:
     return ModelError(equations.causal.bondgraph.source, [error("too_large", message, where)])
 
 
+def _bareiss(entries: dict, size: int, ring):
+    """Both determinants (of the leading block and of the whole) by sympy's fraction-free
+    elimination over the polynomial ring (used where evaluation would take too many points)."""
+    rows: dict = {}
+    for (i, j), value in entries.items():
+        rows.setdefault(i, {})[j] = value
+    whole = DomainMatrix(rows, (size, size), ring.to_domain())
+    return whole[: size - 1, : size - 1].det(), whole.det()
+
+
 def _solve(equations: Equations, F, pencil, B, C):
     """C (sE - A)^-1 B by a fraction-free solve over the polynomials in s and the symbols."""
     size = len(equations.states)
@@ -164,7 +186,7 @@ def _rationals(polys) -> list[Fraction]:
     ]
 
 
-def _canonical(equations: Equations, gens, G) -> TransferFunction:
+def _canonical(equations: Equations, gens, num, den) -> TransferFunction:
     """Coprime, integer, content 1, positive leading term of the highest power of s.
 
     Over an algebraic number field, the same for the rational numbers the coefficients are
@@ -172,8 +194,7 @@ def _canonical(equations: Equations, gens, G) -> TransferFunction:
     cleared of denominators and of their common factor (for rational coefficients, this is
     the form over ZZ).
     """
-    num, den = G.numer, G.denom  # coprime
-    domain = num.ring.domain
+    domain = num.ring.domain  # num and den coprime
     if not domain.is_ZZ:
         num, den = num.quo_ground(den.LC), den.quo_ground(den.LC)
         scale = domain.convert(math.lcm(*(x.denominator for x in _rationals((num, den)))))
