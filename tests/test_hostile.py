@@ -331,3 +331,16 @@ def test_coefficients_beyond_four_thousand_digits(tmp_path):
     )
     kind, line, _, message = only(problem)
     assert (kind, line) == ("too_large", 6) and "7998 digits" in message and took < HANG
+
+
+def test_a_transfer_function_that_a_value_makes_zero(tmp_path):
+    # found by the fuzz test: a transformer of ratio 0 cuts the sensor off; the bordered
+    # determinant is then 0, and G = 0 (not an internal error)
+    path = tmp_path / "zero.bg"
+    path.write_text(
+        "model zero\nparam z = 0\nunknown k = 1\nSf:u -> 0:a\n0:a -> R:r(k)\n"
+        "0:a -> TF:t(z) -> 0:b\n0:b -> De:y\n0:b -> R:r2(1)\n"
+    )
+    tf = transfer_for(path)
+    assert (tf.numerator, tf.denominator) == (0, 1)
+    assert oracle_tf(path) == 0

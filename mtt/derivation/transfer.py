@@ -114,7 +114,7 @@ def transfer_function(equations: Equations) -> TransferFunction:
             if not leading:
                 raise _singular(equations, ": det(sE - A) is identically zero")
             # the last row's multipliers (the others' cancel between the two determinants)
-            last = denominators.to_dok()[size, size] * scales.get(size, 1)
+            last = F.convert(denominators.to_dok()[size, size]).numer * scales.get(size, 1)
             num, den = full, leading * last
             common = num.gcd(den)  # one gcd, in the ring (fractions would take several)
             num, den = num.exquo(common), den.exquo(common)
