@@ -5,7 +5,8 @@ Run: .venv/bin/python tests/fuzz_campaign.py --count 10000 --jobs 2 [--first 0] 
 Model i is drawn from random.Random(i): a random model when i % 3 is 0, a mutated example
 when it is 1, a well-formed model with random expressions when it is 2. Each runs every
 command of `fuzzing.COMMANDS` (check, show, causality, ss, tf, theta, compile, and an import
-of the generated estimator) in a worker process. The summary counts
+of the generated estimator) and of `fuzzing.MORE_COMMANDS` (--symbolic, --keep, --set,
+--unknown) in a worker process. The summary counts
 the outcomes (all commands fine, a model error, an internal error, past 2 s, text from the
 model run) and the kinds of error `mtt check` reported; the text of every bug, hang and
 slow model is written to DIR (default fuzz-findings/) to reproduce it.
@@ -46,7 +47,7 @@ def one(index: int) -> tuple[int, str, tuple, float, str]:
         files = fuzzing.Files(fuzzing.valid_model(rng, expressions=True), {})
     with tempfile.TemporaryDirectory() as directory:
         try:
-            outcome = fuzzing.run(files, Path(directory))
+            outcome = fuzzing.run(files, Path(directory), fuzzing.COMMANDS + fuzzing.MORE_COMMANDS)
         except fuzzing.Hang:
             return index, "hang", (), 4 * fuzzing.HANG, files.model
     if outcome.executed:

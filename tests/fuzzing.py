@@ -63,6 +63,12 @@ COMMANDS = [
     ["theta", "--latex"],
     ["compile", "--json"],
 ]
+# what the campaign runs besides: every parameter symbolic, values set on the command line
+MORE_COMMANDS = [
+    ["tf", "--symbolic"],
+    ["theta", "--keep", "p,q", "--set", "w=sqrt(2)"],
+    ["ss", "--set", "p=1e300", "--unknown", "q"],
+]
 
 
 def _name(rng: random.Random, pool: list[str], odd: float = 0.05) -> str:

@@ -344,3 +344,62 @@ def test_a_transfer_function_that_a_value_makes_zero(tmp_path):
     tf = transfer_for(path)
     assert (tf.numerator, tf.denominator) == (0, 1)
     assert oracle_tf(path) == 0
+
+
+# --- the size of a model ------------------------------------------------------------------
+
+
+def test_a_model_of_more_than_five_thousand_bonds(models):
+    text = "model m\nSe:v -> 1:j\n1:j -> Df:y\n" + "".join(
+        f"1:j -> C:c{i}(1)\n" for i in range(6000)
+    )
+    start = time.perf_counter()
+    problem = models.failure(text)
+    assert time.perf_counter() - start < 5 * HANG  # reading 5000 bonds takes some time
+    (error,) = problem.errors
+    assert (error.kind, error.position.line) == ("too_large", 5002)
+
+
+def test_three_small_files_cannot_make_a_huge_model(tmp_path):
+    # 100 subsystems of 99 subsystems each: 9900 instances, under that limit, but 30000
+    # bonds (check took 20 s); refused at the subsystem statement that passes 5000 bonds
+    (tmp_path / "leaf.bg").write_text(
+        "model leaf\nparam r = 1\nSS:p -> 0:a\n0:a -> C:c(1)\n0:a -> R:r\n"
+    )
+    middle = ["model mid", "SS:p -> 1:j"]
+    for i in range(99):
+        middle += [f'subsystem l{i} = "leaf.bg"', f"1:j -> l{i}.p"]
+    (tmp_path / "mid.bg").write_text("\n".join(middle) + "\n")
+    top = ["model top", "Se:v -> 1:t", "1:t -> Df:i"]
+    for i in range(100):
+        top += [f'subsystem m{i} = "mid.bg"', f"1:t -> m{i}.p"]
+    (tmp_path / "top.bg").write_text("\n".join(top) + "\n")
+    start = time.perf_counter()
+    with pytest.raises(ModelError) as caught:
+        transfer_for(tmp_path / "top.bg")
+    assert time.perf_counter() - start < 5 * HANG
+    (error,) = caught.value.errors
+    assert error.kind == "too_large" and "more than 5000 bonds" in error.message
+    assert error.file.endswith("mid.bg")  # at the statement of the leaf that passes the limit
+
+
+def test_a_model_file_over_a_megabyte(tmp_path):
+    path = tmp_path / "big.bg"
+    path.write_text(model("2") + ("# " + "x" * 998 + "\n") * 1100)
+    with pytest.raises(ModelError) as caught:
+        transfer_for(path)
+    assert caught.value.kind == "io" and "larger than" in str(caught.value)
+
+
+def test_roots_in_functions_of_kept_symbols_and_high_order_roots(tmp_path):
+    # found by the fuzz campaign: log(q - sqrt(2)) is a variable of its own, whose root is
+    # not the field's; 2^(1/2000) is refused before sympy looks for its minimal polynomial
+    path = rc_file(tmp_path, "log(q - sqrt(2))*c + sqrt(2)")
+    tf = transfer_for(path)
+    s, c, q = sympy.symbols("s c q")
+    point = {s: 2, c: 3, q: 5}
+    assert (
+        abs(numeric(tf.numerator / tf.denominator, point) - numeric(oracle_tf(path), point)) < 1e-20
+    )
+    problem, took = failure(model("c*(2^(1/2))^(1/1000) + sqrt(3)"), tmp_path)
+    assert only(problem)[0] == "too_large" and took < HANG

@@ -16,7 +16,7 @@ def in_powers_of_s(expression: sympy.Expr) -> str:
     poly = sympy.Poly(expression, LAPLACE)
     terms = []
     for (power,), coefficient in poly.terms():
-        c = sympy.factor(coefficient)
+        c = _factored(coefficient)  # each coefficient factored
         monomial = {0: "", 1: "s"}.get(power, f"s**{power}")
         if not monomial:
             terms.append(str(c))
@@ -27,6 +27,17 @@ def in_powers_of_s(expression: sympy.Expr) -> str:
         else:
             terms.append(f"{_grouped(c)}*{monomial}")
     return " + ".join(terms).replace("+ -", "- ") or "0"
+
+
+def _factored(polynomial: sympy.Expr) -> sympy.Expr:
+    """The polynomial factored, when that is cheap: one of many terms or of huge numbers
+    (sympy's multivariate factoring looks for primes of their size) only has its common
+    factors taken out."""
+    numbers = polynomial.atoms(sympy.Rational)
+    digits = max((len(str(abs(r.p))) + len(str(r.q)) for r in numbers), default=0)
+    if digits > 40 or len(sympy.Add.make_args(sympy.expand(polynomial))) > 24:
+        return sympy.factor_terms(polynomial)
+    return sympy.factor(polynomial)
 
 
 def _heading(theta: Theta) -> str:
@@ -53,7 +64,7 @@ def tf_text(theta: Theta) -> str:
         f"  numerator   (m = {theta.m}):  {in_powers_of_s(theta.num)}",
         f"  denominator (n = {theta.n}):  {in_powers_of_s(theta.den)}",
         "",
-        f"  G(s) = {_grouped(sympy.factor(theta.num))} / ({sympy.factor(theta.den)})",
+        f"  G(s) = {_grouped(_factored(theta.num))} / ({_factored(theta.den)})",
     ]
     return "\n".join(lines)
 

@@ -81,6 +81,15 @@ class NumberField(AlgebraicField):
         return a if self == K0 else super().from_AlgebraicField(a, K0)
 
 
+def _degree_bound(expr: sympy.Expr) -> int:
+    """A bound on the degree of an algebraic number over Q, from how it is written."""
+    if expr.is_Rational:
+        return 1
+    if expr.is_Pow:
+        return expr.exp.q * _degree_bound(expr.base)
+    return math.prod(_degree_bound(a) for a in expr.args)
+
+
 @dataclass
 class Constants:
     """What the values of a model's components hold besides rational numbers."""
@@ -148,8 +157,11 @@ class Constants:
             return QQ
         roots = sorted(self.algebraic, key=sympy.default_sort_key)
         degree = 1
-        for root in roots:
-            degree *= sympy.degree(sympy.minimal_polynomial(root, sympy.Dummy()))
+        for root in roots:  # a bound first: 2^(1/1000) must not reach minimal_polynomial
+            bound = _degree_bound(root)
+            if bound <= MAX_FIELD_DEGREE:
+                bound = sympy.degree(sympy.minimal_polynomial(root, sympy.Dummy()))
+            degree *= bound
             if degree > MAX_FIELD_DEGREE:
                 raise Unsupported(
                     "too_large",
@@ -170,10 +182,12 @@ class Constants:
         are put in as the field's elements, not found again by sympy for each value."""
         if not self.elements:
             return K.from_sympy(value)
-        dummies = {root: sympy.Dummy() for root in self.elements}
         names = tuple(K.symbols) if K.is_FractionField else ()
-        helper = QQ.frac_field(*names, *dummies.values())
-        fraction = helper.from_sympy(value.xreplace(dummies))
+        # the field's variables that are expressions (log(q - sqrt(2))) keep their roots
+        kept = {g: sympy.Dummy() for g in names if not g.is_Symbol}
+        dummies = {root: sympy.Dummy() for root in self.elements}
+        helper = QQ.frac_field(*(kept.get(g, g) for g in names), *dummies.values())
+        fraction = helper.from_sympy(value.xreplace(kept).xreplace(dummies))
         ground = K.domain if K.is_FractionField else K
         roots = list(self.elements.values())
 

@@ -86,13 +86,22 @@ def _parameter_values(causal: CausalBondGraph, parametrisation: Parametrisation)
     return values, held
 
 
-def _coefficient_domain(held: Constants, free: tuple[str, ...], source) -> Domain:
+def _coefficient_domain(held: Constants, free: tuple[str, ...], graph, values) -> Domain:
     """The field of rational functions in the free parameters and the constants' variables,
-    over QQ or the algebraic number field of the model's roots."""
+    over QQ or the algebraic number field of the model's roots (a field too large is
+    reported at the first component whose value holds one of them)."""
     try:
         ground = held.ground()
     except Unsupported as problem:
-        raise ModelError(source, [error(problem.kind, str(problem))]) from None
+        where = next(
+            (
+                c.argument.position
+                for c in graph.components
+                if c.name in values and values[c.name].atoms(sympy.Pow) & held.algebraic
+            ),
+            None,
+        )
+        raise ModelError(graph.source, [error(problem.kind, str(problem), where)]) from None
     gens = [sympy.Symbol(name) for name in free]
     gens += [g for g in held.variables() if g not in gens]
     return ground.frac_field(*gens) if gens else ground
@@ -215,7 +224,7 @@ def derive(causal: CausalBondGraph, parametrisation: Parametrisation) -> Equatio
     graph = causal.bondgraph
     values, held = _parameter_values(causal, parametrisation)
     signals = {c.name: _signals(graph, c, values.get(c.name)) for c in graph.components}
-    K = _coefficient_domain(held, parametrisation.free, graph.source)
+    K = _coefficient_domain(held, parametrisation.free, graph, values)
     explicit: dict[str, Form] = {}
     extra: list[str] = []
     constraints: list[Form] = []

@@ -29,6 +29,7 @@ __all__ = ["LAPLACE", "MAX_DIGITS", "RESERVED", "Expression", "NameUse", "Signal
 
 MAX_SYNTAX_ERRORS = 50
 MAX_LINE = 10_000  # characters: lark reads some 100000 a second
+MAX_BONDS = 5_000  # in a model, subsystems included: the derivation's work grows with them
 
 
 @dataclass(frozen=True)
@@ -276,6 +277,7 @@ def _statements(source: Source) -> tuple[list, list[Diagnostic]]:
     parser = _parser()
     statements: list = []
     problems: list[Diagnostic] = []
+    bonds = 0
     for number, line in enumerate(source.text.split("\n"), start=1):
         if len(problems) >= MAX_SYNTAX_ERRORS:
             break
@@ -296,6 +298,11 @@ def _statements(source: Source) -> tuple[list, list[Diagnostic]]:
             continue
         for item in _ToModel(problems, number).transform(tree).children:
             statements.extend(item if isinstance(item, list) else [item])
+            bonds += len(item) if isinstance(item, list) else 0  # a chain of bonds
+        if bonds > MAX_BONDS:
+            message = f"more than {MAX_BONDS} bonds (a limit): the rest is not read"
+            problems.append(error("too_large", message, Position(number, 1)))
+            break
     return statements, problems
 
 

@@ -26,7 +26,7 @@ from mtt.language.diagnostics import (
     Source,
     error,
 )
-from mtt.language.parse import ParsedModel, SubsystemDecl, parse
+from mtt.language.parse import MAX_BONDS, ParsedModel, SubsystemDecl, parse
 
 MAX_FILE_BYTES = 1 << 20  # a model file of a megabyte is already absurd
 MAX_DEPTH = 32  # subsystems within subsystems
@@ -38,8 +38,12 @@ def read_source(path: str | Path) -> Source:
     errors too (kind `io`)."""
     name = str(path)
     try:
-        return Source(name, Path(path).read_text(encoding="utf-8-sig"))
-    except (OSError, UnicodeDecodeError) as exc:
+        with open(path, "rb") as file:
+            data = file.read(MAX_FILE_BYTES + 1)
+        if len(data) > MAX_FILE_BYTES:
+            raise ValueError(f"larger than {MAX_FILE_BYTES} bytes (a limit)")
+        return Source(name, data.decode("utf-8-sig"))
+    except (OSError, ValueError) as exc:  # UnicodeDecodeError is a ValueError
         problem = error("io", f"cannot read the file: {_reason(exc)}")
         raise ModelError(Source(name, ""), [problem]) from None
 
@@ -84,6 +88,8 @@ class _Loader:
         self.problems: list[Diagnostic] = []
         self.files: dict[tuple[int, int], _Parsed | None] = {}  # by (device, inode)
         self.instances = 0
+        self.bonds = 0  # of every instance so far, with multiplicity
+        self.full = False  # a limit was met: the other subsystem statements are not read
 
     def load(self, instance: Instance, ancestors: tuple[tuple[int, int], ...]) -> None:
         seen: set[str] = set()
@@ -129,7 +135,10 @@ class _Loader:
             )
             return None
         self.instances += 1
+        if self.full:
+            return None
         if len(ancestors) > MAX_DEPTH or self.instances > MAX_INSTANCES:
+            self.full = True
             self.fail(
                 "too_large",
                 f"{label}: more than {MAX_DEPTH} levels of subsystems or {MAX_INSTANCES} "
@@ -147,6 +156,12 @@ class _Loader:
         origin = Origin(parsed.source, (inclusion, *parent.origin.within))
         if parsed.model is None:
             self.problems += [relocated(d, origin) for d in parsed.problems]
+            return None
+        self.bonds += len(parsed.model.bonds)
+        if self.bonds > MAX_BONDS:
+            self.full = True
+            message = f"{label}: the model would have more than {MAX_BONDS} bonds (a limit)"
+            self.fail("too_large", message, where)
             return None
         instance = Instance(name, parsed.model, origin, decl)
         self.load(instance, (*ancestors, identity))
@@ -177,6 +192,7 @@ def load_tree(parsed: ParsedModel) -> tuple[Instance, list[Diagnostic]]:
     """The model and every subsystem file it brings in, with the problems of reading them."""
     root = Instance("", parsed, Origin(parsed.source))
     loader = _Loader()
+    loader.bonds = len(parsed.bonds)
     try:
         info = os.stat(parsed.source.name)
         ancestors = ((info.st_dev, info.st_ino),)
