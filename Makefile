@@ -44,11 +44,7 @@ demo: $(STAMP)
 # S0 a different trajectory). Its experiments below pass the same option.
 COMPILE_OPTIONS_absorber := --keep tau,l
 COMPILE_OPTIONS_absorber_stages := --keep tau,l
-# The two-unknown DC motor: estimators of several unknowns are to come (issue 11); until
-# then its estimator identifies the load inertia, with the armature resistance known.
-COMPILE_OPTIONS_dc_motor := --unknown jl
-# The same for the series RLC circuit with three unknowns: its estimator identifies c.
-COMPILE_OPTIONS_rlc3 := --unknown c
+# dc_motor (ra, jl) and rlc3 (r, l, c) identify all their unknowns together.
 GENERATED := $(patsubst models/%.bg,generated/%.py,$(MODELS))
 
 compile: $(GENERATED)

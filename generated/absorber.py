@@ -98,6 +98,7 @@ INPUT = 'Sf:feed'
 INPUT_DESCRIPTION = 'solute feed flow'  # the model's words for it (None: none)
 OUTPUT = 'De:x_l'
 OUTPUT_DESCRIPTION = 'liquid product concentration'
+UNKNOWNS = ('k',)
 UNKNOWN = 'k'  # called k in this module's API
 TRUE_VALUE = 0.72  # the model file's value of the unknown, for simulations
 TRANSFER_FUNCTION = (
@@ -105,6 +106,7 @@ TRANSFER_FUNCTION = (
     '+ k*l + l*s**3*tau**3 + 3*l*s**2*tau**2 + 3*l*s*tau + l)'
 )
 n, m, N = 3, 0, 3  # degree of A(s), degree of B(s), degree of theta in k
+MONOMIALS = ((0,), (1,), (2,), (3,))  # K(k): each column's powers of the unknowns
 PARAMETERS = ('tau', 'l')  # known parameters kept symbolic
 DEFAULTS = {'tau': 2.0, 'l': 0.5}  # their values in the model file
 
@@ -164,17 +166,133 @@ def _choice(name: str, value: str, choices: tuple[str, ...]) -> str:
     return value
 
 
-def _bounds(bounds) -> tuple[float, float]:
-    """(lo, hi) with lo < hi, each finite or infinite; None is the whole real line."""
-    if bounds is None:
-        return -math.inf, math.inf
+SCALAR = len(UNKNOWNS) == 1  # one unknown: k is a float; several: a vector in UNKNOWNS order
+DEFAULT_RANGE = 10.0  # several unknowns: each searched within this factor of the model's value
+
+
+def _point(name: str, value) -> float | np.ndarray:
+    """A value of the unknowns, checked: a float for one unknown (a number, or a sequence or
+    dict of one), else an array in the order of UNKNOWNS (from a sequence in that order, or
+    a dict from name to value)."""
+    if isinstance(value, dict):
+        value = [_named(name, value)[unknown] for unknown in UNKNOWNS]
+    if SCALAR:
+        if np.ndim(value) == 1 and len(value) == 1:
+            value = value[0]
+        return _real(name, value)
     try:
-        lo, hi = (float(value) for value in bounds)
+        array = np.array(value, dtype=float)
     except (TypeError, ValueError):
-        raise ValueError(f"bounds must be a pair (lo, hi) of numbers, not {bounds!r}") from None
+        array = None
+    if array is None or array.shape != (len(UNKNOWNS),):
+        raise ValueError(
+            f"{name} must give the {len(UNKNOWNS)} unknowns {', '.join(UNKNOWNS)} (a sequence in "
+            f"that order, or a dict by name), not {value!r}"
+        )
+    for i, number in enumerate(array):
+        _real(f"{name}[{i}] ({UNKNOWNS[i]})", number)
+    return array
+
+
+def _shown(k) -> str:
+    """k as a message shows it: the number, or name = value for each unknown."""
+    if SCALAR:
+        return f"{float(k):.6g}"
+    return ", ".join(f"{name} = {value:.6g}" for name, value in zip(UNKNOWNS, k, strict=True))
+
+
+def _prior_weights(S0):
+    """S0: a number > 0 (one unknown), or for several one number for all or one per unknown
+    (a sequence in the order of UNKNOWNS, or a dict by name): then an array."""
+    if SCALAR or np.ndim(S0) == 0 and not isinstance(S0, dict):
+        S0 = _positive("S0", S0)
+        return S0 if SCALAR else np.full(len(UNKNOWNS), S0)
+    weights = _point("S0", S0)
+    for name, weight in zip(UNKNOWNS, weights, strict=True):
+        _positive(f"S0 of {name}", weight)
+    return weights
+
+
+def _named(name: str, values: dict, complete: bool = True) -> dict:
+    """A dict by unknown's name, checked: only unknowns, and (complete) every one of them."""
+    strangers = [key for key in values if key not in UNKNOWNS]
+    if strangers:
+        raise ValueError(
+            f"{name}: {strangers[0]!r} is not an unknown of {MODEL} (its unknowns: "
+            f"{', '.join(UNKNOWNS)})"
+        )
+    missing = [unknown for unknown in UNKNOWNS if unknown not in values]
+    if complete and missing:
+        raise ValueError(f"{name}: no value for the unknown {missing[0]!r}")
+    return values
+
+
+def _interval(name: str, pair) -> tuple[float, float]:
+    """(lo, hi) with lo < hi, each finite or infinite."""
+    try:
+        lo, hi = (float(value) for value in pair)
+    except (TypeError, ValueError):
+        raise ValueError(f"{name} must be a pair (lo, hi) of numbers, not {pair!r}") from None
     if math.isnan(lo) or math.isnan(hi) or not lo < hi:
-        raise ValueError(f"bounds must be (lo, hi) with lo < hi, not ({lo}, {hi})")
+        raise ValueError(f"{name} must be (lo, hi) with lo < hi, not ({lo}, {hi})")
     return lo, hi
+
+
+def _default_interval(i: int) -> tuple[float, float] | None:
+    """Unknown i's default search interval: within DEFAULT_RANGE of the model file's value
+    (of the same sign); None when the file gives no non-zero value."""
+    value = TRUE_VALUE if SCALAR else TRUE_VALUE[i]
+    if not value:
+        return None
+    lo, hi = sorted((value / DEFAULT_RANGE, value * DEFAULT_RANGE))
+    return lo, hi
+
+
+def _bounds(bounds, required: bool = True):
+    """The search region. One unknown: (lo, hi) with lo < hi, each finite or infinite (None:
+    the whole real line; a dict by name or a list of one pair also do). Several: an array
+    (p, 2) of finite (lo, hi) per unknown, from a list of pairs in the order of UNKNOWNS or
+    a dict from name to pair; an unknown not given (or bounds None) is searched within a
+    factor DEFAULT_RANGE of the model file's value, and without one `required` bounds are an
+    error (else the result is None: no region to search)."""
+    if SCALAR:
+        if isinstance(bounds, dict):
+            bounds = _named("bounds", bounds)[UNKNOWNS[0]]
+        elif isinstance(bounds, list | tuple) and len(bounds) == 1 and np.ndim(bounds[0]) == 1:
+            bounds = bounds[0]
+        return (-math.inf, math.inf) if bounds is None else _interval("bounds", bounds)
+    if bounds is None:
+        given = {}
+    elif isinstance(bounds, dict):
+        given = _named("bounds", bounds, complete=False)
+    else:
+        pairs = list(bounds) if isinstance(bounds, list | tuple | np.ndarray) else None
+        if pairs is None or len(pairs) != len(UNKNOWNS):
+            raise ValueError(
+                f"bounds must give a (lo, hi) pair for each of the {len(UNKNOWNS)} unknowns "
+                f"{', '.join(UNKNOWNS)} (a list in that order, or a dict by name), not {bounds!r}"
+            )
+        given = dict(zip(UNKNOWNS, pairs, strict=True))
+    box = np.empty((len(UNKNOWNS), 2))
+    for i, name in enumerate(UNKNOWNS):
+        if name in given:
+            box[i] = _interval(f"bounds[{name!r}]", given[name])
+            if not np.isfinite(box[i]).all():
+                raise ValueError(
+                    f"bounds[{name!r}] must be finite with several unknowns (the global search "
+                    f"covers a box), not {tuple(box[i])}"
+                )
+            continue
+        default = _default_interval(i)
+        if default is None:
+            if not required:
+                return None
+            raise ValueError(
+                f"bounds: give an interval (lo, hi) to search for {name!r} (a list of pairs, or "
+                "a dict by name): the model file gives it no value to search around"
+            )
+        box[i] = default
+    return box
 
 
 def _known_values(known: dict) -> dict[str, float]:
@@ -253,14 +371,15 @@ def _signals(*named: tuple[str, object], minimum: int, after: float = -math.inf)
 # The system and its filtered signals ---------------------------------------------------------
 
 
-def transfer_function(k: float, **known: float) -> tuple[np.ndarray, np.ndarray]:
-    """(num, den) of G(s) at k, highest power of s first (scipy.signal's convention)."""
-    k = _real("k", k)
-    coefficients = theta(**known) @ k ** np.arange(N + 1)  # [a0..an, -b0..-bm]
+def transfer_function(k, **known: float) -> tuple[np.ndarray, np.ndarray]:
+    """(num, den) of G(s) at k, highest power of s first (scipy.signal's convention); k the
+    unknown's value (several: a vector in the order of UNKNOWNS, or a dict by name)."""
+    k = _point("k", k)
+    coefficients = theta(**known) @ _K(k)  # [a0..an, -b0..-bm]
     den = np.trim_zeros(coefficients[n::-1], "f")
     num = np.trim_zeros(-coefficients[:n:-1], "f")
     if den.size == 0:
-        raise ValueError(f"the denominator A(s) vanishes at k = {k}")
+        raise ValueError(f"the denominator A(s) vanishes at k = {_shown(k)}")
     return (num if num.size else np.zeros(1)), den
 
 
@@ -291,8 +410,9 @@ def _responses(A, B, t: np.ndarray, W: np.ndarray, holds: tuple[str, ...], out=N
     return states
 
 
-def simulate(t, u, k: float, *, hold: str = "linear", **known: float) -> np.ndarray:
-    """The output at times t for input samples u, from rest: exact for the stated hold.
+def simulate(t, u, k, *, hold: str = "linear", **known: float) -> np.ndarray:
+    """The output at times t for input samples u, from rest, with the unknowns at k (several:
+    a vector in the order of UNKNOWNS, or a dict by name): exact for the stated hold.
 
     Between samples the input is interpolated linearly (hold="linear") or held
     (hold="zoh"); the response to that input is computed by matrix exponentials, once per
@@ -740,27 +860,68 @@ def _propagate(Phi, Gamma, ends, z0, index=None, out=None) -> np.ndarray:
 
 # The cost: J(k, t) as a polynomial in k, built from the moments layer and Theta -------------
 #
-# Polynomials in k are rows of coefficients in ascending powers (row[p] multiplies k^p), or
-# of Taylor coefficients about a centre (row[i] = J^(i)(centre) / i!); most functions take
-# a stack of rows, one per sample, and work on all of them at once.
+# Polynomials in k are rows of coefficients over BASIS, the monomials of J (row[j] multiplies
+# k^BASIS[j]); with one unknown BASIS holds the powers 0..2N, so a row is in ascending
+# powers, or of Taylor coefficients about a centre (row[i] = J^(i)(centre) / i!). Most
+# functions take a stack of rows, one per sample, and work on all of them at once. With
+# several unknowns, the functions of the next section work on them.
 
 EPS = float(np.finfo(float).eps)
 NOISE = 10.0  # rounding noise: within NOISE (1 + memory / step) eps of the terms it sums
 ROUNDING = 16 * EPS
 SETTLED = 0.1 * math.sqrt(EPS)  # a Newton step this small (relative) leaves rounding
+_EXPONENTS = np.array(MONOMIALS, dtype=int)  # (columns of Theta, unknowns)
+
+
+def _cost_basis(exponents: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """BASIS, the monomials of J: the products K_a K_b of two of theta's and the prior's 1,
+    k_i and k_i^2, ordered as theta's columns (by total degree, then higher powers of the
+    earlier unknowns first: for one unknown, the powers 0..2N); and PAIRS[a, b], the place
+    in BASIS of K_a K_b."""
+    width, count = exponents.shape
+    found = {tuple(int(e) for e in a + b) for a in exponents for b in exponents}
+    for i in range(count):
+        found |= {tuple(power * (j == i) for j in range(count)) for power in (0, 1, 2)}
+    basis = sorted(found, key=lambda powers: (sum(powers), tuple(-e for e in powers)))
+    place = {powers: j for j, powers in enumerate(basis)}
+    pairs = np.array([[place[tuple(int(e) for e in a + b)] for b in exponents] for a in exponents])
+    return np.array(basis, dtype=int), pairs
+
+
+BASIS, PAIRS = _cost_basis(_EXPONENTS)
+_PRIOR = np.array([[np.flatnonzero((BASIS == power * np.eye(len(UNKNOWNS), dtype=int)[i]).all(1))[0]
+                    for power in (0, 1, 2)] for i in range(len(UNKNOWNS))])  # fmt: skip
+
+
+def _K(k) -> np.ndarray:
+    """K(k), the monomials of theta's columns at k: theta(k) = Theta @ K(k)."""
+    if SCALAR:
+        return k ** np.arange(N + 1)
+    return np.prod(k ** _EXPONENTS, -1)
+
+
+def _theta_slopes(Theta: np.ndarray, k) -> np.ndarray:
+    """dtheta/dk at k: a column per unknown (rows a0..an, -b0..-bm)."""
+    if SCALAR:
+        powers = k ** np.arange(N + 1)
+        return (Theta @ (np.arange(N + 1) * np.r_[0.0, powers[:-1]]))[:, None]
+    unit = np.eye(len(UNKNOWNS), dtype=int)
+    lowered = np.maximum(_EXPONENTS[None] - unit[:, None], 0)  # (unknowns, columns, unknowns)
+    return Theta @ (_EXPONENTS.T * np.prod(k ** lowered, -1)).T
 
 
 def _cost_forms(Theta: np.ndarray) -> np.ndarray:
-    """Q_p (2N+1, n+m+2, n+m+2): the k^p coefficient of g^2 / 2 is X^T Q_p X.
+    """Q_j (len(BASIS), n+m+2, n+m+2): the k^BASIS[j] coefficient of g^2 / 2 is X^T Q_j X.
 
-    g(k) = X^T Theta K(k) with K(k) = [1, k, ..., k^N], so g^2 / 2 sums Theta_a Theta_b^T / 2
-    over the pairs of columns a + b = p. This is the only place Theta meets the moments.
+    g(k) = X^T Theta K(k), so g^2 / 2 sums Theta_a Theta_b^T / 2 over the pairs of columns
+    whose monomials multiply to BASIS[j] (for one unknown, a + b = j). This is the only place
+    Theta meets the moments.
     """
     width = Theta.shape[1]
-    forms = np.zeros((2 * width - 1, Theta.shape[0], Theta.shape[0]))
+    forms = np.zeros((len(BASIS), Theta.shape[0], Theta.shape[0]))
     for a in range(width):
         for b in range(width):
-            forms[a + b] += 0.5 * np.outer(Theta[:, a], Theta[:, b])
+            forms[PAIRS[a, b]] += 0.5 * np.outer(Theta[:, a], Theta[:, b])
     return forms
 
 
@@ -916,6 +1077,403 @@ def _local_minima(A: np.ndarray, centre: float) -> np.ndarray:
     return np.sort(centre + real[curvature > 0])
 
 
+# Polynomials in several unknowns: Taylor expansions, Newton's method, curvature bounds -------
+#
+# With several unknowns, a row over BASIS is also held as a dense tensor with one axis per
+# unknown (axis i: the powers 0..SHAPE[i] - 1 of k_i), flattened: its Taylor expansion
+# about a point (the coefficients of J(point + d) in d) is a synthetic division along each
+# axis in turn, and from it come J's value, gradient and Hessian there. With one unknown
+# the tensor is the row itself, and the functions above do the same in fewer operations.
+
+SHAPE = tuple(int(top) + 1 for top in BASIS.max(0))  # the tensor of a row over BASIS
+_PLACES = np.ravel_multi_index(tuple(BASIS.T), SHAPE)  # each coefficient's place in it
+_UNIT = np.eye(len(UNKNOWNS), dtype=int)
+_GRADIENT = np.ravel_multi_index(tuple(_UNIT.T), SHAPE)  # where d/dk_i sits (e_i)
+_HESSIAN = np.array([np.ravel_multi_index(tuple((_UNIT[i] + _UNIT).T), SHAPE)
+                     for i in range(len(UNKNOWNS))])  # e_i + e_j  # fmt: skip
+_HESSIAN_SCALE = 1.0 + np.eye(len(UNKNOWNS))  # d2/dk_i^2 is twice its coefficient
+
+
+def _tensor(P: np.ndarray) -> np.ndarray:
+    """Rows over BASIS (..., len(BASIS)) as flattened tensors (..., prod(SHAPE))."""
+    T = np.zeros(P.shape[:-1] + (math.prod(SHAPE),))
+    T[..., _PLACES] = P
+    return T
+
+
+def _shift(T: np.ndarray, centre: np.ndarray) -> np.ndarray:
+    """The Taylor tensors about `centre` (..., unknowns) of the flattened tensors T (...,
+    prod(SHAPE)): the coefficients of J(centre + d) in d, by synthetic division by
+    (x - centre_i) along each axis i."""
+    lead = np.broadcast_shapes(T.shape[:-1], np.shape(centre)[:-1])
+    T = np.array(np.broadcast_to(T, lead + T.shape[-1:])).reshape(lead + SHAPE)
+    centre = np.broadcast_to(centre, lead + (len(UNKNOWNS),))
+    for axis, size in enumerate(SHAPE):
+        moved = np.moveaxis(T, len(lead) + axis, -1)  # a view: the division works in place
+        c = centre[..., axis].reshape(lead + (1,) * (len(SHAPE) - 1))
+        for low in range(size - 1):
+            for i in range(size - 2, low - 1, -1):
+                moved[..., i] += c * moved[..., i + 1]
+    return T.reshape(lead + (-1,))
+
+
+def _local_form(A: np.ndarray):
+    """Value, gradient (..., p) and Hessian (..., p, p) at the centre of Taylor tensors A."""
+    return A[..., 0], A[..., _GRADIENT], A[..., _HESSIAN] * _HESSIAN_SCALE
+
+
+def _evaluate(T: np.ndarray, x: np.ndarray) -> np.ndarray:
+    """The flattened tensor(s) T at the points x (..., unknowns), T broadcast against x."""
+    lead = np.broadcast_shapes(T.shape[:-1], x.shape[:-1])
+    R = np.broadcast_to(T, lead + T.shape[-1:]).reshape(lead + SHAPE)
+    x = np.broadcast_to(x, lead + (len(UNKNOWNS),))
+    for axis in range(len(SHAPE) - 1, -1, -1):  # Horner along the last axis left
+        value = np.zeros(R.shape[:-1])
+        point = x[..., axis].reshape(lead + (1,) * axis)
+        for i in range(SHAPE[axis] - 1, -1, -1):
+            value = value * point + R[..., i]
+        R = value
+    return R
+
+
+def _lowest_curvature(H: np.ndarray) -> np.ndarray:
+    """The smallest eigenvalue of each symmetric matrix H (..., p, p)."""
+    return np.linalg.eigvalsh(0.5 * (H + np.swapaxes(H, -1, -2)))[..., 0]
+
+
+def _newton_several(P: np.ndarray, k, iterations: int = 12) -> tuple[np.ndarray, np.ndarray]:
+    """`_newton` for several unknowns: the stationary point of each row P near k (rows,
+    unknowns), and whether it converged: the gradient within rounding of the terms it sums
+    where the Hessian is positive definite, or every component's step below sqrt(eps)
+    relative."""
+    k = np.array(np.broadcast_to(k, P.shape[:-1] + (len(UNKNOWNS),)), dtype=float)
+    T, sizes = _tensor(P), _tensor(np.abs(P))
+    done = np.zeros(k.shape[:-1], dtype=bool)
+    for _ in range(iterations):
+        _, gradient, H = _local_form(_shift(T, k))
+        size = _local_form(_shift(sizes, np.abs(k)))[1]
+        ok = _lowest_curvature(H) > 0
+        safe = np.where(ok[..., None, None], H, np.eye(len(UNKNOWNS)))
+        step = np.where(ok[..., None], -np.linalg.solve(safe, gradient[..., None])[..., 0], 0.0)
+        settled = ok & (
+            (np.abs(gradient) <= ROUNDING * size).all(-1)
+            | (np.abs(step) <= SETTLED * np.abs(k)).all(-1)
+        )
+        k = np.where(done[..., None], k, k + step)
+        done |= settled
+        if done.all():
+            break
+    return k, done & np.isfinite(k).all(-1)
+
+
+def _second_derivatives(A: np.ndarray) -> np.ndarray:
+    """The flattened tensors (..., unknowns, unknowns, prod(SHAPE)) of d2J/dk_i dk_j, J the
+    flattened tensors A (zero-padded to SHAPE)."""
+    lead = A.shape[:-1]
+    T = A.reshape(lead + SHAPE)
+
+    def derivative(T: np.ndarray, axis: int) -> np.ndarray:
+        moved = np.moveaxis(T, len(lead) + axis, -1)
+        out = np.zeros_like(moved)
+        out[..., :-1] = moved[..., 1:] * np.arange(1, moved.shape[-1])
+        return np.moveaxis(out, -1, len(lead) + axis)
+
+    first = [derivative(T, i) for i in range(len(SHAPE))]
+    return np.stack([np.stack([derivative(first[i], j).reshape(lead + (-1,)) for j in range(len(SHAPE))],
+                              -2) for i in range(len(SHAPE))], -3)  # fmt: skip
+
+
+def _curvature_floor_several(A: np.ndarray, reach: np.ndarray) -> np.ndarray:
+    """`_curvature_floor` for several unknowns: a lower bound of the smallest eigenvalue of
+    L^-1 H(centre + d) L^-T for every |d_i| <= reach_i, where H is J's Hessian and L L^T its
+    value at the centre of the Taylor tensors A (1 at d = 0): positive where H stays positive
+    definite over that box. The entries of L^-1 H L^-T are polynomials in d, enclosed over
+    the box by their Bernstein coefficients (see `_search`); the least eigenvalue of the
+    interval matrix is at least its middle's less the Frobenius norm of its radius."""
+    H = _local_form(A)[2]
+    ok = _lowest_curvature(H) > 0
+    L = np.linalg.cholesky(np.where(ok[..., None, None], H, np.eye(len(UNKNOWNS))))
+    inverse = np.linalg.inv(L)
+    normal = np.einsum("...ki,...lj,...ijg->...klg", inverse, inverse, _second_derivatives(A))
+    reach = np.broadcast_to(reach, A.shape[:-1] + (len(UNKNOWNS),))[..., None, None, :]
+    B = _bernstein(_on_box(normal, -reach, 2.0 * reach).reshape(normal.shape[:-1] + SHAPE))
+    flat = B.reshape(normal.shape)
+    low, high = flat.min(-1), flat.max(-1)
+    middle, radius = 0.5 * (low + high), 0.5 * (high - low)
+    floor = _lowest_curvature(middle) - np.sqrt((radius**2).sum((-1, -2)))
+    return np.where(ok, floor, -1.0)
+
+
+# The same steps for one or several unknowns: what the engine and the search call ----------
+
+
+def _expansion(P, k):
+    """The Taylor rows (one unknown) or flattened Taylor tensors (several) of P about k."""
+    return _taylor(P, k) if SCALAR else _shift(_tensor(np.asarray(P)), k)
+
+
+def _stationary(P: np.ndarray, k):
+    """Stationary points of the rows P near k, and whether Newton's method converged."""
+    return _newton(P, k) if SCALAR else _newton_several(P, k)
+
+
+def _convex(A: np.ndarray) -> np.ndarray:
+    """Whether J is convex at the centre of the expansions A (J_2 > 0; several: the
+    Hessian positive definite)."""
+    return A[..., 2] > 0 if SCALAR else _lowest_curvature(_local_form(A)[2]) > 0
+
+
+def _floor(A: np.ndarray, reach):
+    """A lower bound of J's curvature within `reach` of the centre of the expansions A."""
+    return _curvature_floor(A, reach) if SCALAR else _curvature_floor_several(A, reach)
+
+
+# The global search: every local minimum of a polynomial in several unknowns within a box ------
+#
+# J is a polynomial on a box. In the box's own coordinates x in [0, 1]^p (k = lo + x (hi -
+# lo)), damped Newton descents from a grid of starts (and any given) find local minima. A
+# branch and bound on the Bernstein form then proves that nothing in the box lies lower: the
+# Bernstein coefficients of J on a sub-box enclose its values there (their least is a lower
+# bound, the corner ones are its values at the corners), and halving a box (de Casteljau)
+# gives both halves' coefficients. A sub-box goes when its lower bound is above the best
+# value found, when J is monotonic across it in some direction and its lower face is inside
+# the box (its least value is on a neighbour's face), or when it lies where J is provably
+# convex around a local minimum found (the minimum is its least value: the minimum's basin,
+# the largest box about it on which an enclosure of the Hessian is positive definite). A
+# corner lower than the best starts a new descent. The search ends when no sub-box is left:
+# no point of the box is lower than the best minimum by more than SEARCH_TOLERANCE of J's
+# largest value there (`certified`). The grid's descents report the other local minima.
+
+GRID_STARTS = 32  # starts of the descents, on a grid over the box (and any given)
+SEARCH_TOLERANCE = 1e-10  # of J's largest value on the box: lower by less is as low
+MAX_BOXES = 4096  # sub-boxes kept at once: beyond, the search stops uncertified
+SAME_POINT = 1e-7  # minima closer than this (in the box's coordinates) are one
+_STEPS = 0.5 ** np.arange(20)  # the descents' trial step lengths
+
+
+@dataclass(frozen=True)
+class _Minima:
+    """Local minima of a polynomial within a box: points (count, unknowns), lowest first, and
+    their values; certified when the branch and bound proved the first the lowest point in
+    the box (to the tolerance)."""
+
+    points: np.ndarray
+    values: np.ndarray
+    certified: bool
+
+
+def _bernstein_matrix(size: int) -> np.ndarray:
+    """M with b = M a: power coefficients a on [0, 1] to Bernstein coefficients b."""
+    degree = size - 1
+    M = np.zeros((size, size))
+    for j in range(size):
+        for i in range(j + 1):
+            M[j, i] = math.comb(j, i) / math.comb(degree, i)
+    return M
+
+
+_BERNSTEIN = [_bernstein_matrix(size) for size in SHAPE]
+
+
+def _on_box(T: np.ndarray, lo: np.ndarray, width: np.ndarray) -> np.ndarray:
+    """Flattened tensors of P(lo + width x) in x, P the flattened tensors T (broadcast
+    against lo and width): the expansion about lo, each axis scaled by the box's width."""
+    U = _shift(T, lo)
+    lead = U.shape[:-1]
+    U = U.reshape(lead + SHAPE)
+    width = np.broadcast_to(width, lead + (len(SHAPE),))
+    for axis, size in enumerate(SHAPE):
+        scale = width[..., axis, None] ** np.arange(size)
+        U = U * scale.reshape(lead + (1,) * axis + (size,) + (1,) * (len(SHAPE) - 1 - axis))
+    return U.reshape(lead + (-1,))
+
+
+def _bernstein(U: np.ndarray) -> np.ndarray:
+    """Bernstein coefficients on [0, 1]^p of the power tensors U (..., *SHAPE)."""
+    B = U
+    lead = U.ndim - len(SHAPE)
+    for axis, M in enumerate(_BERNSTEIN):
+        B = np.moveaxis(np.tensordot(B, M, axes=([lead + axis], [1])), -1, lead + axis)
+    return B
+
+
+def _halves(B: np.ndarray, axis: int) -> tuple[np.ndarray, np.ndarray]:
+    """The Bernstein coefficients (boxes, *SHAPE) of each box's lower and upper half along
+    `axis` (de Casteljau at 1/2)."""
+    work = np.moveaxis(B, 1 + axis, -1)
+    size = work.shape[-1]
+    lower, upper = np.empty_like(work), np.empty_like(work)
+    lower[..., 0], upper[..., -1] = work[..., 0], work[..., -1]
+    for r in range(1, size):
+        work = 0.5 * (work[..., :-1] + work[..., 1:])
+        lower[..., r], upper[..., size - 1 - r] = work[..., 0], work[..., -1]
+    return np.moveaxis(lower, -1, 1 + axis), np.moveaxis(upper, -1, 1 + axis)
+
+
+def _free_hessian(x: np.ndarray, gradient: np.ndarray, H: np.ndarray, strict: bool = True):
+    """The coordinates a bound does not hold at x (the gradient pushes it out of the box
+    there), and the Hessian restricted to them (identity on the others)."""
+    if strict:
+        held = ((x <= 0.0) & (gradient > 0)) | ((x >= 1.0) & (gradient < 0))
+    else:
+        held = ((x <= 0.0) & (gradient >= 0)) | ((x >= 1.0) & (gradient <= 0))
+    free = ~held
+    H = np.where(free[:, :, None] & free[:, None, :], H, 0.0) + np.eye(x.shape[1]) * held[:, None, :]
+    return free, H
+
+
+def _descend(U: np.ndarray, x: np.ndarray, iterations: int = 80) -> tuple[np.ndarray, np.ndarray]:
+    """Local minima of the polynomial U (flattened tensor, box coordinates) on [0, 1]^p from
+    the starts x (starts, unknowns): Newton steps on the coordinates not held by a bound
+    (the Hessian shifted where it is not positive definite), the longest of _STEPS that
+    lowers J, until no step does; then Newton on the gradient polishes what values cannot
+    resolve. Returns the distinct points reached and whether each is a local minimum (the
+    free Hessian positive definite, the projected gradient within rounding)."""
+    x = np.clip(x, 0.0, 1.0)
+    active = np.arange(x.shape[0])
+    for _ in range(iterations):
+        here = x[active]
+        value, gradient, H = _local_form(_shift(U, here))
+        free, H = _free_hessian(here, gradient, H)
+        lowest = _lowest_curvature(H)
+        scale = np.abs(H).max((1, 2))
+        H = H + np.maximum(1e-9 * scale - lowest, 0.0)[:, None, None] * np.eye(x.shape[1])
+        step = -np.linalg.solve(H, np.where(free, gradient, 0.0)[..., None])[..., 0]
+        trials = np.clip(here[:, None] + _STEPS[None, :, None] * step[:, None], 0.0, 1.0)
+        better = _evaluate(U, trials) < value[:, None]
+        found = better.any(1)
+        chosen = trials[np.arange(here.shape[0]), np.argmax(better, 1)]
+        moved = found & (np.abs(chosen - here).max(1) > 4 * EPS)
+        x[active[found]] = chosen[found]
+        active = active[moved]
+        if active.size == 0:
+            break
+    order = np.lexsort(x.T[::-1])
+    x = x[order]
+    x = x[np.r_[True, np.abs(np.diff(x, axis=0)).max(1) > 1e-6]]  # starts that met
+    sizes = np.abs(U)
+    minimum = np.zeros(x.shape[0], dtype=bool)
+    for _ in range(3):  # polish: values no longer tell, the gradient still does
+        _, gradient, H = _local_form(_shift(U, x))
+        size = _local_form(_shift(sizes, x))[1]
+        free, H = _free_hessian(x, gradient, H, strict=False)
+        slope = np.where(free, gradient, 0.0)
+        minimum = (_lowest_curvature(H) > 0) & (np.abs(slope) <= 1e-6 * np.maximum(size, EPS)).all(1)
+        safe = np.where(minimum[:, None, None], H, np.eye(x.shape[1]))
+        step = -np.linalg.solve(safe, slope[..., None])[..., 0]
+        polished = np.clip(x + np.where(minimum[:, None], step, 0.0), 0.0, 1.0)
+        after = _local_form(_shift(U, polished))[1]
+        keep = np.abs(np.where(free, after, 0.0)).max(1) < np.abs(slope).max(1)
+        x = np.where(keep[:, None], polished, x)
+    return x, minimum
+
+
+def _basins(U: np.ndarray, points: np.ndarray) -> np.ndarray:
+    """For each local minimum (box coordinates), the largest box about it, x +- 2^-j within
+    [0, 1], on which an enclosure of J's Hessian is positive definite: J is convex there,
+    so the minimum is its least value. (points, 2, unknowns): lower and upper corners; an
+    empty box (lower above upper) where none was found down to 2^-40."""
+    count, p = points.shape
+    radii = 0.5 ** np.arange(1, 41)
+    lo = np.clip(points[:, None] - radii[None, :, None], 0.0, 1.0)
+    hi = np.clip(points[:, None] + radii[None, :, None], 0.0, 1.0)
+    B = _bernstein(_on_box(U, lo, hi - lo).reshape(lo.shape[:-1] + SHAPE))
+    # enclosures of the Hessian's entries, from differences of the Bernstein coefficients
+    # (in each sub-box's own coordinates: convexity does not depend on the scale)
+    low, high = np.empty((count, radii.size, p, p)), np.empty((count, radii.size, p, p))
+    for i in range(p):
+        for j in range(i, p):
+            degree_i, degree_j = SHAPE[i] - 1, SHAPE[j] - 1
+            if i == j:
+                D = degree_i * (degree_i - 1) * np.diff(B, 2, axis=2 + i)
+            else:
+                D = degree_i * degree_j * np.diff(np.diff(B, axis=2 + i), axis=2 + j)
+            flat = D.reshape(count, radii.size, -1)
+            low[:, :, i, j] = low[:, :, j, i] = flat.min(-1)
+            high[:, :, i, j] = high[:, :, j, i] = flat.max(-1)
+    middle, radius = 0.5 * (low + high), 0.5 * (high - low)
+    convex = _lowest_curvature(middle) > np.sqrt((radius**2).sum((-1, -2)))
+    first = np.argmax(convex, 1)
+    found = convex[np.arange(count), first]
+    boxes = np.stack([lo[np.arange(count), first], hi[np.arange(count), first]], 1)
+    boxes[~found] = [[1.0], [0.0]]
+    return boxes
+
+
+def _search(T: np.ndarray, centre, box: np.ndarray, starts=()) -> _Minima:
+    """The local minima within `box` (unknowns, 2) of the polynomial whose flattened Taylor
+    tensor about `centre` is T, the lowest proved lowest (see above). `starts`: points to
+    descend from besides the grid (an estimate at hand)."""
+    p = box.shape[0]
+    lo, width = box[:, 0], box[:, 1] - box[:, 0]
+    U = _on_box(T, lo - centre, width)
+    B = _bernstein(U.reshape(SHAPE))
+    tolerance = SEARCH_TOLERANCE * max(float(np.abs(B).max()), np.finfo(float).tiny)
+    side = max(3, int(round(GRID_STARTS ** (1 / p))))
+    grid = (np.arange(side) + 0.5) / side
+    x = np.stack(np.meshgrid(*[grid] * p, indexing="ij"), -1).reshape(-1, p)
+    extra = np.reshape(np.asarray(starts, dtype=float), (-1, p))
+    x = np.concatenate([x, (extra - lo) / width])
+    points, values = np.zeros((0, p)), np.zeros(0)
+
+    def add(x: np.ndarray) -> None:
+        nonlocal points, values
+        x, minimum = _descend(U, x)
+        for point in x[minimum]:
+            if not (np.abs(points - point).max(1) <= SAME_POINT).any():
+                points = np.concatenate([points, point[None]])
+                values = np.append(values, _evaluate(U, point))
+
+    add(x)
+    basins = _basins(U, points) if points.size else np.zeros((0, 2, p))
+    boxes, corners = B[None], np.zeros((1, p))  # Bernstein coefficients, lower corners
+    side_length = np.ones(p)
+    certified = False
+    for round_ in range(60 * p):
+        best = values.min() if values.size else np.inf
+        flat = boxes.reshape(boxes.shape[0], -1)
+        low_corner = flat.min(1)  # the least Bernstein coefficient: a lower bound
+        corner_values = boxes[(slice(None), *np.ix_(*[[0, size - 1] for size in SHAPE]))]
+        corner_values = corner_values.reshape(boxes.shape[0], -1)
+        lowest = corner_values.min()
+        if lowest < best - tolerance:  # a corner below every minimum found: descend from it
+            which = np.argmin(corner_values.min(1))
+            offsets = np.array(np.unravel_index(np.argmin(corner_values[which]), (2,) * p))
+            before = points.shape[0]
+            add((corners[which] + offsets * side_length)[None])
+            if points.shape[0] > before:
+                basins = np.concatenate([basins, _basins(U, points[before:])])
+                continue
+        drop = low_corner > best - tolerance
+        margin = 64 * EPS * float(np.abs(flat).max())
+        for axis in range(p):
+            slopes = np.diff(boxes, axis=1 + axis).reshape(boxes.shape[0], -1)
+            rising, falling = (slopes > margin).all(1), (slopes < -margin).all(1)
+            drop |= rising & (corners[:, axis] > 0.0)
+            drop |= falling & (corners[:, axis] + side_length[axis] < 1.0)
+        if basins.size:
+            inside = ((corners[:, None] >= basins[None, :, 0])
+                      & (corners[:, None] + side_length <= basins[None, :, 1])).all(-1)  # fmt: skip
+            drop |= inside.any(1)
+        boxes, corners = boxes[~drop], corners[~drop]
+        if boxes.shape[0] == 0:
+            certified = True
+            break
+        if boxes.shape[0] > MAX_BOXES // 2:
+            break
+        axis = round_ % p
+        lower, upper = _halves(boxes, axis)
+        side_length[axis] *= 0.5
+        shifted = corners.copy()
+        shifted[:, axis] += side_length[axis]
+        boxes, corners = np.concatenate([lower, upper]), np.concatenate([corners, shifted])
+    if not certified and boxes.shape[0]:  # what is left: look there too
+        order = np.argsort(boxes.reshape(boxes.shape[0], -1).min(1))[:64]
+        add(corners[order] + 0.5 * side_length)
+    order = np.argsort(values, kind="stable")
+    return _Minima(lo + points[order] * width, values[order], certified)
+
+
 # The engine: exact moments accumulated with forgetting, and the estimate that follows them ---
 #
 # J(k, t_i) = sum over intervals l < i of e^(-beta (t_i - t_(l+1))) q_l(k), plus the prior,
@@ -953,7 +1511,7 @@ class _Setup:
     def of(Theta: np.ndarray, c: np.ndarray, beta: float, hold: str) -> "_Setup":
         A, B = _realisation(c)
         order = c.size - 1
-        phi_map = np.zeros((2 * order, N + 1))
+        phi_map = np.zeros((2 * order, Theta.shape[1]))
         phi_map[: n + 1], phi_map[order : order + m + 1] = Theta[: n + 1], Theta[n + 1 :]
         # a state's rounding is about eps times the size of its filter's whole state, each
         # entry scaled to w/C (s^i w/C is about rate^i w/C): within a factor order, this sum
@@ -1032,16 +1590,19 @@ class _Run:
     smallest float in a long record, but its shape (all that k^ depends on) does not.
     """
 
-    def __init__(self, setup: _Setup, k0: float, S0: float):
+    def __init__(self, setup: _Setup, k0, S0):
         self.setup = setup
         self.z = np.zeros(2 * setup.A.shape[0])  # the filter states [z_y, z_u]
         self.t = -math.inf  # the last sample: time and values
         self.u = self.y = 0.0
-        self.P = np.zeros(2 * N + 1)
-        self.P[:3] = [k0 * k0, -2.0 * k0, 1.0]  # the prior S0 (k - k0)^2 / 2
-        self.log_scale = math.log(0.5 * S0)
+        self.P = np.zeros(len(BASIS))
+        weights = np.broadcast_to(S0, (len(UNKNOWNS),)) / np.max(S0)
+        for places, weight, centre in zip(_PRIOR, weights, np.atleast_1d(k0), strict=True):
+            self.P[places] += [weight * (centre * centre), -2.0 * centre * weight, weight]
+        self.log_scale = math.log(0.5 * np.max(S0))  # the prior sum S0_i (k_i - k0_i)^2 / 2
         self.khat = k0
-        self.taylor = np.array(_taylor(self.P.tolist(), k0))  # of J about k^, scaled as P
+        self.taylor = np.array(_expansion(self.P.tolist() if SCALAR else self.P, k0))  # of J
+        # about k^, scaled as P
         self.ok, self.stopped_at = True, None
         self.informed = -math.inf  # the time of the last informative sample
         self.noise = None  # the last sample's (|phi|, floor), see _Setup.noise
@@ -1075,7 +1636,7 @@ class _Run:
         a fold, a stopped run, a scale beyond floats)."""
         setup, step = self.setup, self.step
         h = t - self.t
-        if not (self.ok and step and abs(h - step[0]) <= TIME_RESOLUTION * abs(t)):
+        if not (SCALAR and self.ok and step and abs(h - step[0]) <= TIME_RESOLUTION * abs(t)):
             return False
         Phi, Gamma, W = step[1]
         order = Phi.shape[-1]
@@ -1129,7 +1690,7 @@ class _Run:
             self.t, self.u, self.y, self.informed = t[0], u[0], y[0], t[0]
             self.noise = self.setup.noise(self.z[None])
             if record:
-                pieces.append((t[:1], np.array([self.khat]), self.taylor[None],
+                pieces.append((t[:1], np.array([self.khat], dtype=float), self.taylor[None],
                                np.array([self.log_scale])))  # fmt: skip
             t, u, y = t[1:], u[1:], y[1:]
         span = 300.0 / self.setup.beta if self.setup.beta > 0 else math.inf
@@ -1186,35 +1747,40 @@ class _Run:
             v = rows[l]
             return before + weight * np.einsum("d,pde,e->p", v, setup.partial(h, tau), v)
 
-        khat, taylor = self._follow(E, times, quiet, partial) if self.ok else (np.empty(0), E[:0])
+        if self.ok:
+            khat, taylor = self._follow(E, times, quiet, partial)
+        else:
+            khat, taylor = np.empty((0,) + np.shape(self.khat)), self.taylor[None][:0]
         self.z, self.t, self.u, self.y = rows[-1, :width], times[-1], us[-1], ys[-1]
         scale = np.abs(E[-1]).max()
         self.P, self.log_scale = E[-1] / scale, log_scale[-1] + math.log(scale)
-        if khat.size:
-            self.khat = khat[-1]
-        self.taylor = np.array(_taylor(self.P.tolist(), self.khat))
-        return t[: khat.size], khat, taylor, log_scale[: khat.size]
+        if len(khat):
+            self.khat = khat[-1] if SCALAR else khat[-1].copy()
+        self.taylor = np.array(_expansion(self.P.tolist() if SCALAR else self.P, self.khat))
+        return t[: len(khat)], khat, taylor, log_scale[: len(khat)]
 
     def _follow(self, E: np.ndarray, times: np.ndarray, quiet: np.ndarray, partial):
         """k^ and the Taylor rows of J about it at each new sample, up to a fold; after a
         quiet interval (no information), k^ is the one before it."""
         count = E.shape[0]
-        khat, taylor = np.empty(count), np.empty_like(E)
+        khat = np.empty((count,) + np.shape(self.khat))
+        taylor = np.empty((count,) + self.taylor.shape)
         k, before = self.khat, self.taylor
         i, window = 0, count  # all at once, unless k^ moves too far for one Newton start
         while i < count:
             j = min(count, i + window)
-            candidate, converged = _newton(E[i:j], k)  # all from k: one vectorised solve
+            candidate, converged = _stationary(E[i:j], k)  # all from k: one vectorised solve
             if quiet[i:j].any():  # no information, no update
                 last = np.maximum.accumulate(np.where(quiet[i:j], -1, np.arange(j - i)))
-                candidate = np.where(last < 0, k, candidate[last])
+                kept = (last < 0).reshape((-1,) + (1,) * np.ndim(k))
+                candidate = np.where(kept, k, candidate[last])
                 converged = (last < 0) | converged[last]
-            previous = np.concatenate([[k], candidate[:-1]])
+            previous = np.concatenate([np.asarray(k, dtype=float)[None], candidate[:-1]])
             reach = np.abs(candidate - previous)
-            own = _taylor(E[i:j], candidate)  # J about each new point
+            own = _expansion(E[i:j], candidate)  # J about each new point
             back = np.concatenate([before[None], own[:-1]])  # J before, about the old point
-            good = converged & (own[:, 2] > 0)  # a minimum: J_2 > 0 there
-            good &= (_curvature_floor(own, reach) > 0) & (_curvature_floor(back, reach) > 0)
+            good = converged & _convex(own)  # a minimum: J_2 > 0 there
+            good &= (_floor(own, reach) > 0) & (_floor(back, reach) > 0)
             run = j - i if good.all() else int(np.argmin(good))
             if run:
                 khat[i : i + run], taylor[i : i + run] = candidate[:run], own[:run]
@@ -1225,7 +1791,7 @@ class _Run:
             k = self._cross(i, k, before, times, partial)  # Newton from k^ itself failed
             if k is None:
                 return khat[:i], taylor[:i]
-            before = _taylor(E[i], k)
+            before = _expansion(E[i], k)
             khat[i], taylor[i] = k, before
             i, window = i + 1, 16
         return khat, taylor
@@ -1237,15 +1803,10 @@ class _Run:
         while True:
             target = min(h, done + step)
             P = partial(l, target)
-            r, converged = _newton(P[None], k)
-            reach, own = abs(r[0] - k), _taylor(P, r[0])
-            if (
-                converged[0]
-                and own[2] > 0
-                and _curvature_floor(own, reach) > 0
-                and _curvature_floor(before, reach) > 0
-            ):
-                done, k, before = target, float(r[0]), own
+            r, converged = _stationary(P[None], k)
+            reach, own = np.abs(r[0] - k), _expansion(P, r[0])
+            if converged[0] and _convex(own) and _floor(own, reach) > 0 and _floor(before, reach) > 0:
+                done, k, before = target, (float(r[0]) if SCALAR else r[0].copy()), own
                 if done >= h:
                     return k
                 step *= 2.0
@@ -1263,12 +1824,15 @@ class _Run:
 class Estimate:
     """The estimate at the sample times the run reached, and the cost around it.
 
-    t: sample times; khat: the estimate k^ there (the paper's trajectory from k0);
-    global_k: the global minimiser of J(., t) within `bounds` at each (NaN where J has none);
-    ok: False when the run stopped early, `message` says why and `stopped_at` when;
-    informed_until: the time after which the data were rounding noise and left the estimate
-    unchanged (None when they inform it to the end). J (a property): rows J_2..J_2N, the
-    derivatives of the cost with respect to k at k^.
+    t: sample times; khat: the estimate k^ there (the paper's trajectory from k0; several
+    unknowns: a row per sample, a column per unknown); global_k: the global minimiser of
+    J(., t) within `bounds` at each (NaN where J has none; several unknowns: at the last
+    sample only, as a search per sample would cost more than the run, and where there are
+    bounds: see `minima` for any other); ok: False when the run stopped early, `message`
+    says why and `stopped_at` when; informed_until: the time after which the data were
+    rounding noise and left the estimate unchanged (None when they inform it to the end).
+    J (a property): rows J_2..J_2N, the derivatives of the cost with respect to k at k^
+    (several unknowns: the Hessian of J at k^, one per sample).
     """
 
     t: np.ndarray
@@ -1278,28 +1842,34 @@ class Estimate:
     message: str
     stopped_at: float | None
     informed_until: float | None
-    bounds: tuple[float, float]
-    _shape: np.ndarray = field(repr=False)  # J_i / J_2, i = 2..2N (J scaled to J_2 = 1)
-    _log_J2: np.ndarray = field(repr=False)  # log J_2: J_2 alone may underflow
+    bounds: tuple[float, float] | np.ndarray | None
+    # one unknown: J_i / J_2, i = 2..2N (J scaled to J_2 = 1), and log J_2 (J_2 alone may
+    # underflow); several: J's Taylor tensors about k^ (flattened, a column per sample) and
+    # the log of their scale
+    _shape: np.ndarray = field(repr=False)
+    _log_J2: np.ndarray = field(repr=False)
     warnings: tuple[str, ...] = ()  # what the user can act on (also issued as EstimationWarning)
     filter: np.ndarray | None = field(default=None, repr=False)  # C(s), highest power first
 
     @property
     def J(self) -> np.ndarray:
-        """Rows J_2..J_2N at k^, at every sample (they shrink as e^(-beta t))."""
-        return self._shape * np.exp(self._log_J2)
+        """Rows J_2..J_2N at k^, at every sample (they shrink as e^(-beta t)); several
+        unknowns: the Hessian of J at k^ at every sample (samples, unknowns, unknowns)."""
+        if SCALAR:
+            return self._shape * np.exp(self._log_J2)
+        return _local_form(self._shape.T)[2] * np.exp(self._log_J2)[:, None, None]
 
     @property
-    def k(self) -> float:
-        """The final estimate."""
-        return float(self.khat[-1])
+    def k(self):
+        """The final estimate (several unknowns: a vector in the order of UNKNOWNS)."""
+        return float(self.khat[-1]) if SCALAR else self.khat[-1].copy()
 
     @property
     def at_global(self) -> bool:
         """Whether the final k^ is the global minimiser of J within the bounds (True when J
         has no global minimiser to compare with)."""
-        best = self.global_k[-1]
-        return bool(np.isnan(best) or abs(self.k - best) <= 1e-6 * (abs(self.k) + abs(best)))
+        best, k = self.global_k[-1], self.k
+        return bool(np.isnan(best).any() or np.all(np.abs(k - best) <= 1e-6 * (np.abs(k) + np.abs(best))))
 
     def _index(self, t) -> int:
         if t is None:
@@ -1318,44 +1888,67 @@ class Estimate:
 
     def normalised_cost(self, k, t=None):
         """(J(k) - J(k^)) / J_2 at the sample at or before time t (default the last), for
-        scalar or array k: (k - k^)^2 / 2 near k^, and independent of the scale of C(s)."""
+        scalar or array k: (k - k^)^2 / 2 near k^, and independent of the scale of C(s).
+        (One unknown; with several, `cost`.)"""
+        if not SCALAR:
+            raise ValueError("normalised_cost is for one unknown: with several, use cost(k, t)")
         i = self._index(t)
         return _value(self._row(i), np.asarray(k, dtype=float) - self.khat[i])
 
     def cost(self, k, t=None):
-        """J(k) - J(k^) at the sample at or before time t (default the last).
+        """J(k) - J(k^) at the sample at or before time t (default the last); k scalar or
+        array (several unknowns: points, the unknowns along the last axis).
 
-        J is a polynomial of degree 2N in k whose derivatives at k^ are J_1 = 0 and
-        J_2..J_2N, so its Taylor series about k^ is exact.
+        J is a polynomial in k whose Taylor series about k^ (J_1 = 0, J_2..J_2N; several
+        unknowns: its Taylor tensor) is exact.
         """
         i = self._index(t)
-        return self.normalised_cost(k, self.t[i]) * math.exp(self._log_J2[i])
+        if SCALAR:
+            return self.normalised_cost(k, self.t[i]) * math.exp(self._log_J2[i])
+        row = self._shape[:, i]
+        shift = np.asarray(k, dtype=float) - self.khat[i]
+        return (_evaluate(row, shift) - row[0]) * math.exp(self._log_J2[i])
 
     def minima(self, t=None) -> np.ndarray:
-        """Every local minimum of the cost in k at the sample at or before t, ascending."""
+        """Every local minimum of the cost in k at the sample at or before t, ascending
+        (several unknowns: points within the bounds, a row each, the lowest first)."""
         i = self._index(t)
-        return _local_minima(self._row(i), self.khat[i])
+        if SCALAR:
+            return _local_minima(self._row(i), self.khat[i])
+        if self.bounds is None:
+            raise ValueError(
+                "the minima of a cost in several unknowns are searched within bounds: run "
+                "estimate with bounds= (the model file gives no values to search around)"
+            )
+        return _search(self._shape[:, i], self.khat[i], self.bounds, [self.khat[i]]).points
 
 
 PRIOR_SHARE = 10.0  # the data's curvature under this multiple of the prior's: a warning
 
 
-def prior_weight(t, u, y, *, k0: float, fraction: float = 1e-4, C=None, hold: str = "linear",
-                 **known) -> float:  # fmt: skip
+def prior_weight(t, u, y, *, k0, fraction: float = 1e-4, C=None, hold: str = "linear",
+                 **known):  # fmt: skip
     """An S0 for `estimate` relative to the data: `fraction` times the data's curvature of
     the cost at k0 per unit of time, so that the prior weighs as much as `fraction` time
-    units of the record (S0 = 1e-4 absolute outweighs the data of a slow filter)."""
+    units of the record (S0 = 1e-4 absolute outweighs the data of a slow filter). Several
+    unknowns: one per unknown (each in its own units), from the Hessian's diagonal."""
     t, u, y = _signals(("t", t), ("u", u), ("y", y), minimum=2)
-    k0 = _real("k0", k0)
+    k0 = _point("k0", k0)
     fraction = _positive("fraction", fraction)
     Theta = theta(**known)
     if isinstance(C, str) and C.strip() == "auto":
         C = _auto_filter(Theta, k0, [(t, u, y)])
     total = moments(t, u, y, C=C, hold=hold, offset=False, initial_state=False, **known)
     coefficients = total.criterion(Theta)
-    curvature = float(_value(coefficients[2:] * np.arange(2, 2 * N + 1) * np.arange(1, 2 * N), k0))
-    if not curvature > 0:
-        raise ValueError(f"the data carry no information about {UNKNOWN} at k0 = {k0:g}: no relative S0")
+    if SCALAR:
+        curvature = float(_value(coefficients[2:] * np.arange(2, 2 * N + 1) * np.arange(1, 2 * N), k0))
+    else:
+        curvature = np.diag(_local_form(_shift(_tensor(coefficients), k0))[2])
+    if not np.all(curvature > 0):
+        which = UNKNOWN if SCALAR else UNKNOWNS[int(np.argmin(curvature))]
+        raise ValueError(
+            f"the data carry no information about {which} at k0 = {_shown(k0)}: no relative S0"
+        )
     return fraction * curvature / float(t[-1] - t[0])
 
 
@@ -1364,9 +1957,9 @@ def estimate(
     u,
     y,
     *,
-    k0: float,
+    k0,
     beta: float = 0.1,
-    S0: float = 1e-4,
+    S0=1e-4,
     C=None,
     hold: str = "linear",
     engine: str = "moments",
@@ -1387,7 +1980,11 @@ def estimate(
     k^(t) is its stationary point J_1 = 0 continued from k^(t0) = k0: the trajectory of
     the paper's ODE (Nihtila, 1983)
         dk^/dt = -h_1 / J_2,   dJ_i/dt = -beta J_i + h_i + J_(i+1) dk^/dt  (i = 2..2N),
-    h_i = 1/2 d^i(g^2)/dk^i, J_(2N+1) = 0, J_2(t0) = S0. Between samples the output is
+    h_i = 1/2 d^i(g^2)/dk^i, J_(2N+1) = 0, J_2(t0) = S0. With several unknowns k and k0
+    are vectors (in the order of UNKNOWNS, or dicts by name), the prior is
+    1/2 e^(-beta (t - t0)) sum_i S0_i (k_i - k0_i)^2 (S0 one number, or one per unknown: they
+    have their own units), and k^(t) is the stationary point grad J = 0 continued from k0,
+    followed as below with the gradient and Hessian of J. Between samples the output is
     interpolated linearly, and so is the input (hold="linear") unless it was held
     (hold="zoh", as from a digital-to-analogue converter).
 
@@ -1402,23 +1999,30 @@ def estimate(
     for (1 + sT)^(n+1), coefficients (highest power first), text such as "(1+s)^5", or
     "auto": (1 + sT)^(n+1) with T from A(s, k0) and the sampling (as `fit` chooses it). A
     filter faster than the sampling supports is a warning (`warnings`). global_k is the global
-    minimiser of J(., t) within bounds=(lo, hi) (default the real line) at every sample.
+    minimiser of J(., t) within bounds=(lo, hi) (default the real line) at every sample
+    (several unknowns: at the last sample, within bounds as `fit` takes them, by default the
+    model file's values within a factor DEFAULT_RANGE; none without them).
     progress, if given, is called with the time reached as the run goes. If J_2 reaches
     zero along k^ (it has left the region where the cost is convex, and the ODE would
     divide by zero), the run stops there and the result says so; it never holds NaN
     estimates.
     """
     t, u, y = _signals(("t", t), ("u", u), ("y", y), minimum=2)
-    k0 = _real("k0", k0)
+    k0 = _point("k0", k0)
     beta = _positive("beta", beta, allow_zero=True)
-    S0 = _positive("S0", S0)
+    S0 = _prior_weights(S0)
     rtol, atol = _positive("rtol", rtol), _positive("atol", atol)
     if not max_step > 0:
         raise ValueError(f"max_step must be > 0, not {max_step}")
     _choice("hold", hold, HOLDS)
     _choice("engine", engine, ENGINES)
     _choice("method", method, METHODS)
-    bounds = _bounds(bounds)
+    if engine == "ode" and not SCALAR:
+        raise ValueError(
+            "engine='ode' integrates the paper's ODE for one unknown; with several, use "
+            "engine='moments' (the same trajectory, computed exactly)"
+        )
+    bounds = _bounds(bounds, required=False)
     Theta = theta(**known)
     automatic = isinstance(C, str) and C.strip() == "auto"
     c = _auto_filter(Theta, k0, [(t, u, y)]) if automatic else filter_polynomial(C)
@@ -1441,16 +2045,25 @@ def estimate(
             if not run.ok:
                 break
         times, khat, taylor, log_scale = (np.concatenate(part) for part in zip(*parts, strict=True))
-        J = taylor[:, 2:].T * np.array(FACTORIALS[2:])[:, None]
-        shape, log_J2 = J / J[0], log_scale + np.log(J[0])
+        if SCALAR:
+            J = taylor[:, 2:].T * np.array(FACTORIALS[2:])[:, None]
+            shape, log_J2 = J / J[0], log_scale + np.log(J[0])
+        else:
+            shape, log_J2 = taylor.T, log_scale
         stop = None if run.ok else (run.stopped_at, _convexity_lost(run.stopped_at))
         informed = None if run.informed >= t[-1] else float(run.informed)
-    rows = np.zeros((times.size, 2 * N + 1))
-    rows[:, 2:] = shape.T / np.array(FACTORIALS[2:])
-    best = np.concatenate(
-        [_global_minimisers(rows[lo : lo + BLOCK], khat[lo : lo + BLOCK], bounds)
-         for lo in range(0, times.size, BLOCK)]
-    )  # fmt: skip
+    if SCALAR:
+        rows = np.zeros((times.size, 2 * N + 1))
+        rows[:, 2:] = shape.T / np.array(FACTORIALS[2:])
+        best = np.concatenate(
+            [_global_minimisers(rows[lo : lo + BLOCK], khat[lo : lo + BLOCK], bounds)
+             for lo in range(0, times.size, BLOCK)]
+        )  # fmt: skip
+    else:
+        best = np.full(khat.shape, np.nan)
+        if bounds is not None:
+            lowest = _search(taylor[-1], khat[-1], bounds, [khat[-1]]).points
+            best[-1] = lowest[0] if len(lowest) else np.nan
     if stop is not None:
         message = stop[1]
     else:
@@ -1460,12 +2073,19 @@ def estimate(
                 f"; the data stopped informing the estimate at t = {informed:.6g} (after "
                 "that they are rounding noise, which leaves it unchanged)"
             )
-    prior = math.log(S0) - beta * float(times[-1] - times[0])  # log of its J_2 at the end
-    if stop is None and log_J2[-1] - prior < math.log(1.0 + PRIOR_SHARE):
-        data = math.exp(log_J2[-1]) - math.exp(prior) if log_J2[-1] > -700 else 0.0
+    prior = (math.log(S0) if SCALAR else np.log(S0)) - beta * float(times[-1] - times[0])
+    # (the log of the prior's J_2 at the end)
+    if SCALAR:
+        final = np.array([log_J2[-1]])
+    else:
+        with np.errstate(divide="ignore"):
+            final = np.log(np.maximum(np.diag(_local_form(taylor[-1])[2]), 0.0)) + log_J2[-1]
+    for i in np.flatnonzero(final - prior < math.log(1.0 + PRIOR_SHARE)) if stop is None else ():
+        weight = math.exp(np.broadcast_to(prior, final.shape)[i])
+        data = math.exp(final[i]) - weight if final[i] > -700 else 0.0
         found.append(
-            f"the data carry little information about {UNKNOWN}: at the end the prior S0 "
-            f"weighs {math.exp(prior):.3g} in the cost's curvature against the data's "
+            f"the data carry little information about {UNKNOWNS[i]}: at the end the prior S0 "
+            f"weighs {weight:.3g} in the cost's curvature against the data's "
             f"{max(data, 0.0):.3g}, so the estimate stays near k0; lower S0 (prior_weight "
             "sets one relative to the data) or use a richer or longer record"
         )
@@ -1702,7 +2322,7 @@ class Moments:
     XX: np.ndarray
     ZX: np.ndarray | None
     ZZ: np.ndarray | None
-    k: float | None
+    k: float | np.ndarray | None  # several unknowns: a vector
     samples: int
     nuisances: int
 
@@ -1710,7 +2330,7 @@ class Moments:
         if other == 0:  # sum() starts from 0
             return self
         if not isinstance(other, Moments) or (self.k is None) != (other.k is None) or (
-            self.k is not None and self.k != other.k
+            self.k is not None and not np.array_equal(self.k, other.k)
         ):
             raise ValueError("only the moments of one kind of step (the same k) add")
         ZX = None if self.ZX is None else self.ZX + other.ZX
@@ -1721,7 +2341,8 @@ class Moments:
     __radd__ = __add__
 
     def criterion(self, Theta: np.ndarray) -> np.ndarray:
-        """The polynomial in k (ascending coefficients) that the step minimises.
+        """The polynomial in k (coefficients over BASIS: for one unknown, ascending powers)
+        that the step minimises.
 
         Least squares: J(k) = |X^T Theta K(k)|^2 / 2 integrated. Instrumental variables: the
         weighted norm of the instruments' correlation with the error,
@@ -1734,18 +2355,19 @@ class Moments:
         if self.k is None:
             H = self.XX
         else:
-            Q = linalg.null_space((Theta @ self.k ** np.arange(N + 1))[None, :])
+            Q = linalg.null_space((Theta @ _K(self.k))[None, :])
             R = Q.T @ self.ZX
             H = R.T @ np.linalg.lstsq(Q.T @ self.ZZ @ Q, R, rcond=None)[0]
         return _half_square(Theta, H)
 
 
 def _half_square(Theta: np.ndarray, H: np.ndarray) -> np.ndarray:
-    """Ascending coefficients of K(k)^T Theta^T H Theta K(k) / 2, K(k) = [1, k, .., k^N]."""
+    """The coefficients over BASIS of K(k)^T Theta^T H Theta K(k) / 2 (for one unknown,
+    K(k) = [1, k, .., k^N] and ascending powers)."""
     G = Theta.T @ (0.5 * (H + H.T)) @ Theta
-    coefficients = np.zeros(2 * N + 1)
-    for a in range(N + 1):
-        coefficients[a : a + N + 1] += 0.5 * G[a]
+    coefficients = np.zeros(len(BASIS))
+    for a in range(Theta.shape[1]):
+        coefficients[PAIRS[a]] += 0.5 * G[a]
     return coefficients
 
 
@@ -1759,9 +2381,9 @@ def _prefilter(Theta: np.ndarray, k: float, C) -> np.ndarray:
     """F(s) for an instrumental-variable step at k: A(s, k), its roots in the right half
     plane mirrored into the left (any stable prefilter keeps the estimate consistent),
     made monic, times C(s) when one is given (highest power first)."""
-    a = np.trim_zeros((Theta @ k ** np.arange(N + 1))[n::-1], "f")
+    a = np.trim_zeros((Theta @ _K(k))[n::-1], "f")
     if a.size < 2:
-        raise ValueError(f"A(s, k) has degree {a.size - 1} at k = {k:g}: no prefilter")
+        raise ValueError(f"A(s, k) has degree {a.size - 1} at k = {_shown(k)}: no prefilter")
     roots = np.roots(a)
     if (roots.real >= 0).any():
         slowest = np.abs(roots).max() or 1.0
@@ -1800,7 +2422,7 @@ def _record_moments(Theta, t, u, y, *, k, c, hold, offset, initial_state, beta, 
 
 
 def _stable(Theta: np.ndarray, k: float) -> bool:
-    a = np.trim_zeros((Theta @ k ** np.arange(N + 1))[n::-1], "f")
+    a = np.trim_zeros((Theta @ _K(k))[n::-1], "f")
     return a.size > 1 and bool((np.roots(a).real < 0).all())
 
 
@@ -1816,8 +2438,8 @@ def _stabilised_output(Theta, t, u, k, hold) -> np.ndarray:
     """The output of B(s, k)/A~(s), A~ the prefilter's A(s, k) with its unstable roots
     mirrored: instruments that stay bounded (an unstable model's output would not)."""
     f = _prefilter(Theta, k, None)
-    a = np.trim_zeros((Theta @ k ** np.arange(N + 1))[n::-1], "f")
-    b = np.trim_zeros(-(Theta @ k ** np.arange(N + 1))[:n:-1], "f")
+    a = np.trim_zeros((Theta @ _K(k))[n::-1], "f")
+    b = np.trim_zeros(-(Theta @ _K(k))[:n:-1], "f")
     A_, B_, C_, D_ = signal.tf2ss(b / a[0] if b.size else np.zeros(1), f)
     return _responses(A_, B_[:, 0], t, u, (hold,))[0] @ C_[0] + D_[0, 0] * u
 
@@ -1826,7 +2448,8 @@ def moments(t, u, y, *, k=None, C=None, hold: str = "linear", offset: bool = Tru
             initial_state: bool = True, **known) -> Moments:  # fmt: skip
     """One record's sufficient statistics for a step of `fit` (they add over records).
 
-    k None: the least-squares moments with the filter C (see `filter_polynomial`). k given:
+    k None: the least-squares moments with the filter C (see `filter_polynomial`). k given
+    (several unknowns: a vector, or a dict by name):
     an instrumental-variable step's, with the prefilter 1/A(s, k) (times 1/C(s) if C is
     given) and instruments from the model's noise-free output at k. offset and
     initial_state add the nuisance regressors of an output offset and of a non-zero
@@ -1838,7 +2461,7 @@ def moments(t, u, y, *, k=None, C=None, hold: str = "linear", offset: bool = Tru
     if k is None:
         c = filter_polynomial(C)
     else:
-        k = _real("k", k)
+        k = _point("k", k)
         c = None if C is None else filter_polynomial(C)
     return _record_moments(Theta, t, u, y, k=k, c=c, hold=hold, offset=bool(offset),
                            initial_state=bool(initial_state), beta=0.0, known=known)  # fmt: skip
@@ -1927,17 +2550,16 @@ def _validate(Theta, record, k, *, method, c, hold, offset, initial_state, weigh
     nu = np.linalg.lstsq(root * Xi, root[:, 0] * (y - x), rcond=None)[0]
     fitted = x + Xi @ nu
     residuals = y - fitted
-    powers = k ** np.arange(N + 1)
-    slope = Theta @ (np.arange(N + 1) * np.r_[0.0, powers[:-1]])  # dtheta/dk
-    a = (Theta @ powers)[: n + 1]
+    slope = _theta_slopes(Theta, k)  # dtheta/dk, a column per unknown
+    a = (Theta @ _K(k))[: n + 1]
     Dy, Du = _filter_derivatives(f, t, [fitted, u], ("linear", hold), (n, m))
     scale = a[np.flatnonzero(a)[-1]] if a.any() else 1.0  # F = A / a_n
-    psi = -(Dy @ slope[: n + 1, None] + Du @ slope[n + 1 :, None]) / scale  # a column per unknown
+    psi = -(Dy @ slope[: n + 1] + Du @ slope[n + 1 :]) / scale  # a column per unknown
     projected = psi - Xi @ np.linalg.lstsq(root * Xi, root * psi, rcond=None)[0]
     offset_value = 0.0
     if first == 0 and a[0] != 0:  # c = nu[0] * a_n in A y - B u = ... + c/s (Xi scaled by a_n)
         offset_value = float(nu[0] * scale / a[0])
-    influence = np.zeros((1, 1))
+    influence = np.zeros((len(UNKNOWNS), len(UNKNOWNS)))
     if method == "ls":
         influence = _ls_influence(Theta, t, u, y, k, c, hold, first, last, w)
     return _Record(
@@ -1958,9 +2580,8 @@ def _ls_influence(Theta, t, u, y, k, c, hold, first, last, w) -> np.ndarray:
     A'(s, k^)/C(s), so J' moves by the adjoints of those filters applied to phi and epsilon
     (time reversed), each sample weighing its share of the interval around it.
     """
-    powers = k ** np.arange(N + 1)
-    theta_k = Theta @ powers
-    slope = Theta @ (np.arange(N + 1) * np.r_[0.0, powers[:-1]])
+    theta_k = Theta @ _K(k)
+    slope = _theta_slopes(Theta, k)  # a column per unknown
     signals = [y, u, np.ones_like(t)]
     Dy, Du, Dn = _filter_derivatives(c, t, signals, ("linear", hold, "zoh"), (n, m, n))
     error = Dy @ theta_k[: n + 1] + Du @ theta_k[n + 1 :]
@@ -1969,14 +2590,15 @@ def _ls_influence(Theta, t, u, y, k, c, hold, first, last, w) -> np.ndarray:
         Xi = Dn[:, first : last + 1]
         root = np.sqrt(w)[:, None]
         error = error - Xi @ np.linalg.lstsq(root * Xi, root[:, 0] * error, rcond=None)[0]
-        phi = phi - Xi @ np.linalg.lstsq(root * Xi, root[:, 0] * phi, rcond=None)[0]
+        phi = phi - Xi @ np.linalg.lstsq(root * Xi, root * phi, rcond=None)[0]
     back = t[-1] + t[0] - t[::-1]  # the adjoint of a causal filter runs backwards in time
-    reversed_ = [(w * phi)[::-1], (w * error)[::-1]]
-    Rphi, Rerror = _filter_derivatives(c, back, reversed_, ("linear", "linear"), (n, n))
-    g = (Rphi @ theta_k[: n + 1] + Rerror @ slope[: n + 1])[::-1]
+    reversed_ = [*(w[:, None] * phi)[::-1].T, (w * error)[::-1]]
+    *Rphi, Rerror = _filter_derivatives(c, back, reversed_, ("linear",) * len(reversed_),
+                                        (n,) * len(reversed_))  # fmt: skip
+    g = np.stack([R @ theta_k[: n + 1] for R in Rphi], 1) + Rerror @ slope[: n + 1]
     h = np.diff(t)
     share = 0.5 * (np.r_[h, 0.0] + np.r_[0.0, h])
-    G = (g * share)[:, None]  # a column per unknown
+    G = g[::-1] * share[:, None]  # a column per unknown
     return G.T @ G
 
 
@@ -2002,9 +2624,14 @@ class Fit:
     k: the estimate (NaN when there is none: then ok is False and `message` says why);
     k_se: its standard error, from the estimator's asymptotic variance with the noise
     variance estimated from the residuals; ci: the 95 % interval k +- 1.96 k_se;
+    covariance: k's covariance matrix (unknowns x unknowns);
     method: "iv" or "ls"; iterations: instrumental-variable steps taken (0 for "ls");
     minima: the local minima of the last step's criterion within the bounds, ascending;
-    coefficients: that criterion as a polynomial in k (ascending powers: `cost`);
+    coefficients: that criterion as a polynomial in k (over BASIS: ascending powers for one
+    unknown; `cost` evaluates it);
+    With several unknowns k and k_se are vectors in the order of UNKNOWNS, ci an array of
+    (lo, hi) rows, bounds an array of them, and minima the local minima found by the global
+    search (see `_search`), a row each, the lowest criterion first (`cost(minima)`).
     warnings: what the user can act on (also issued as EstimationWarning);
     fit_percent: 100 (1 - |y - y^| / |y - mean y|), the model's simulated output y^ against
     the measured one over all records; residual_rms: the RMS of y - y^; noise_std: the
@@ -2034,10 +2661,14 @@ class Fit:
     residuals: tuple[np.ndarray, ...] = field(repr=False)
     hold: str = field(default="linear", repr=False)
     known: dict = field(default_factory=dict, repr=False)
+    covariance: np.ndarray | None = field(default=None, repr=False)
 
     def cost(self, k):
-        """The last step's criterion at k (scalar or array): J for "ls", V for "iv"."""
-        return _value(self.coefficients, np.asarray(k, dtype=float))
+        """The last step's criterion at k (scalar or array; several unknowns: points, the
+        unknowns along the last axis): J for "ls", V for "iv"."""
+        if SCALAR:
+            return _value(self.coefficients, np.asarray(k, dtype=float))
+        return _evaluate(_tensor(self.coefficients), np.asarray(k, dtype=float))
 
     def simulate(self, t, u, record: int = 0) -> np.ndarray:
         """The fitted model's output for input u at times t, from rest at the operating
@@ -2080,8 +2711,8 @@ def _filter_for(Theta: np.ndarray, k, step: float, span: float) -> np.ndarray:
     known: of the record's span and sampling interval), within [10 dt, span / 10]."""
     lo, hi = SAMPLES_PER_FILTER * step, span / SAMPLES_PER_FILTER
     T = math.sqrt(lo * hi)
-    if k is not None and np.isfinite(k):
-        roots = np.roots(np.trim_zeros((Theta @ k ** np.arange(N + 1))[n::-1], "f"))
+    if k is not None and np.all(np.isfinite(k)):
+        roots = np.roots(np.trim_zeros((Theta @ _K(k))[n::-1], "f"))
         sizes = np.abs(roots[roots != 0])
         if sizes.size and np.isfinite(sizes).all():
             T = float(np.exp(-np.mean(np.log(sizes))))
@@ -2133,15 +2764,16 @@ def _median_step(shapes) -> float:
 
 
 def _check_sizes(shapes, offset: bool, initial_state: bool) -> None:
-    """Each record must have more samples than the nuisance parameters and k."""
+    """Each record must have more samples than the nuisance parameters and the unknowns."""
     first, last = _nuisance_needs(offset, initial_state)
     nuisances = max(last - first + 1, 0)
+    need = nuisances + len(UNKNOWNS) + 1
     for i, shape in enumerate(shapes):
-        if shape.samples < nuisances + 2:
+        if shape.samples < need:
             where = f"{shape.label or f'record {i}'} has" if len(shapes) > 1 else "the record has"
             raise ValueError(
                 f"{where} {shape.samples} samples: too few to determine k and {nuisances} "
-                f"nuisance parameter(s) (offset, initial state); need at least {nuisances + 2}"
+                f"nuisance parameter(s) (offset, initial state); need at least {need}"
             )
 
 
@@ -2180,12 +2812,25 @@ class Records:
         return sum(_residual_sum(Theta, record, k, settings) for record in self.records)
 
 
-def _step(Theta, records, k, c, bounds, beta, settings) -> tuple[float, np.ndarray, Moments]:
+def _step(Theta, records, k, c, bounds, beta, settings):
     """One step of the fit: the records' moments (least squares for k None, else an
-    instrumental-variable step at k), summed, and the global minimiser of the criterion."""
+    instrumental-variable step at k), summed, and the global minimiser of the criterion
+    (several unknowns: with the search's minima, `_Minima`; None for one)."""
     total = records.moments(Theta, k, c, beta, settings)
     coefficients = total.criterion(Theta)
-    return float(_global_minimisers(coefficients, 0.0, bounds)[0]), coefficients, total
+    if SCALAR:
+        return float(_global_minimisers(coefficients, 0.0, bounds)[0]), coefficients, total, None
+    found = _search(_tensor(coefficients), np.zeros(len(UNKNOWNS)), bounds,
+                    [] if k is None else [k])  # fmt: skip
+    best = found.points[0] if len(found.points) else np.full(len(UNKNOWNS), np.nan)
+    return best, coefficients, total, found
+
+
+def _model_point():
+    """The model file's values of the unknowns (None unless it gives every one)."""
+    if SCALAR or TRUE_VALUE is None:
+        return TRUE_VALUE
+    return None if any(value is None for value in TRUE_VALUE) else np.array(TRUE_VALUE)
 
 
 def fit(t, u, y, *, method: str = "iv", C="auto", k0=None, bounds=None, offset: bool = True,
@@ -2193,7 +2838,10 @@ def fit(t, u, y, *, method: str = "iv", C="auto", k0=None, bounds=None, offset: 
     """Fit k to whole records of input u and output y at times t: no prior, nothing to tune.
 
     t, u, y are arrays (one record) or lists of arrays (several experiments: their moments
-    add; each has its own offset and initial state). method="iv" (the default) is a refined
+    add; each has its own offset and initial state). With several unknowns, k0 is a vector
+    (or a dict by name) and the criterion's global minimum is searched within bounds (a list
+    of (lo, hi) per unknown or a dict by name; by default the model file's values within a
+    factor DEFAULT_RANGE), by a search that proves no point of the box lower (`_search`). method="iv" (the default) is a refined
     instrumental-variable estimator (SRIVC, Young): from the least-squares estimate (or k0),
     each step filters u and y with 1/A(s, k^), takes as instruments the model's noise-free
     output at k^ filtered alike, and minimises the instrumental-variable criterion (a
@@ -2225,7 +2873,7 @@ def fit_records(records, *, method: str = "iv", C="auto", k0=None, bounds=None,
     _choice("hold", hold, HOLDS)
     beta = _positive("beta", beta, allow_zero=True)
     bounds = _bounds(bounds)
-    k0 = None if k0 is None else _real("k0", k0)
+    k0 = None if k0 is None else _point("k0", k0)
     offset, initial_state = bool(offset), bool(initial_state)
     Theta = theta(**known)
     automatic = isinstance(C, str) and C.strip() == "auto"
@@ -2238,33 +2886,36 @@ def fit_records(records, *, method: str = "iv", C="auto", k0=None, bounds=None,
     notes: list[str] = []
     interval, span = _median_step(shapes), min(shape.span for shape in shapes)
     if automatic:
-        c = _filter_for(Theta, k0 if k0 is not None else TRUE_VALUE, interval, span)
+        c = _filter_for(Theta, k0 if k0 is not None else _model_point(), interval, span)
     with np.errstate(all="ignore"):
-        k, coefficients, total = _step(Theta, records, None, c, bounds, beta, settings)
-        if automatic and method == "ls" and np.isfinite(k):
+        k, coefficients, total, found = _step(Theta, records, None, c, bounds, beta, settings)
+        if automatic and method == "ls" and np.all(np.isfinite(k)):
             c = _filter_for(Theta, k, interval, span)
-            k, coefficients, total = _step(Theta, records, None, c, bounds, beta, settings)
+            k, coefficients, total, found = _step(Theta, records, None, c, bounds, beta, settings)
         iterations = 0
         if method == "iv":
             extra = None if automatic else c
             k = k0 if k0 is not None else k
             previous = math.inf
-            while np.isfinite(k) and iterations < MAX_ITERATIONS:
-                new, coefficients, total = _step(Theta, records, k, extra, bounds, beta, settings)
+            while np.all(np.isfinite(k)) and iterations < MAX_ITERATIONS:
+                new, coefficients, total, found = _step(Theta, records, k, extra, bounds, beta,
+                                                        settings)  # fmt: skip
                 iterations += 1
-                step, k = abs(new - k), new
-                if step <= CONVERGED * abs(k) or step == previous == 0:
+                change, k = np.abs(new - k), new
+                step = float(np.max(change))
+                if np.all(change <= CONVERGED * np.abs(k)) or step == previous == 0:
                     break
                 previous = step
             else:
-                if np.isfinite(k):
+                if np.all(np.isfinite(k)):
                     notes.append(
                         f"the instrumental-variable steps did not settle in {MAX_ITERATIONS} "
                         f"iterations (the last moved k by {step:.3g}): the estimate may be poor"
                     )
     return _finish(Theta, records, shapes, k, coefficients, method=method, c=c,
                    iterations=iterations, bounds=bounds, beta=beta, notes=notes,
-                   automatic=automatic, settings=settings, last_moments=total, keep=keep)  # fmt: skip
+                   automatic=automatic, settings=settings, last_moments=total, keep=keep,
+                   found=found)  # fmt: skip
 
 
 # The fit's verdict: its uncertainty, its fit and the warnings a user can act on ------------------
@@ -2304,7 +2955,7 @@ def _excitation(total: Moments, Theta: np.ndarray) -> float:
     if total.k is None:
         Q = np.eye(ZZ.shape[0])
     else:
-        Q = linalg.null_space((Theta @ total.k ** np.arange(N + 1))[None, :])
+        Q = linalg.null_space((Theta @ _K(total.k))[None, :])
     M = Q.T @ ZZ @ Q
     scale = np.sqrt(np.abs(np.diag(M)))
     if not (scale > 0).all():
@@ -2355,120 +3006,189 @@ def _input_warnings(shapes, hold: str, nuisances: bool) -> tuple[list[str], bool
     return warnings_, idle
 
 
+def _named_point(k) -> str:
+    """k as a warning names it: `name = value` for each unknown."""
+    if SCALAR:
+        return f"{UNKNOWN} = {k:.6g}"
+    return ", ".join(f"{name} = {value:.6g}" for name, value in zip(UNKNOWNS, k, strict=True))
+
+
+def _fit_minima(coefficients, bounds, found) -> np.ndarray:
+    """The criterion's local minima within the bounds: ascending (one unknown), or the
+    global search's, lowest first (several)."""
+    if not SCALAR:
+        return found.points if found is not None else np.zeros((0, len(UNKNOWNS)))
+    minima = _local_minima(coefficients, 0.0)
+    return minima[(minima >= bounds[0]) & (minima <= bounds[1])]
+
+
+def _criterion_curvature(coefficients: np.ndarray, k) -> np.ndarray:
+    """The criterion's Hessian at k (unknowns x unknowns)."""
+    if SCALAR:
+        return np.atleast_2d(
+            _value(coefficients[2:] * np.arange(2, 2 * N + 1) * np.arange(1, 2 * N), k)
+        )
+    return _local_form(_shift(_tensor(coefficients), k))[2]
+
+
 def _finish(Theta, records, shapes, k, coefficients, *, method, c, iterations, bounds, beta,
-            notes, automatic, settings, last_moments, keep) -> Fit:  # fmt: skip
+            notes, automatic, settings, last_moments, keep, found=None) -> Fit:  # fmt: skip
     """The Fit: validation at k, uncertainty, warnings (issued as EstimationWarning)."""
     nuisances = settings["offset"] or settings["initial_state"]
     said, idle = _input_warnings(shapes, settings["hold"], nuisances)
-    found = list(notes) + said
+    found_ = list(notes) + said
     if method == "ls" and not automatic:
-        found += _filter_warnings_at(c, _median_step(shapes))
-    minima = _local_minima(coefficients, 0.0)
-    minima = minima[(minima >= bounds[0]) & (minima <= bounds[1])]
+        found_ += _filter_warnings_at(c, _median_step(shapes))
+    minima = _fit_minima(coefficients, bounds, found)
     empty = tuple(np.zeros(0) for _ in shapes) if keep else ()
+    count_ = len(UNKNOWNS)
     common = dict(method=method, iterations=iterations, minima=minima, coefficients=coefficients,
                   bounds=bounds, filter=c, hold=settings["hold"], known=dict(settings["known"]))  # fmt: skip
-    if not np.isfinite(k):
+    if not np.all(np.isfinite(k)):
         if not (coefficients[1:] != 0).any():
             message = (
-                f"the data carry no information about {UNKNOWN}: the criterion does not depend on k"
+                f"the data carry no information about {UNKNOWN or ', '.join(UNKNOWNS)}: the "
+                "criterion does not depend on k"
             )
-        else:
+        elif SCALAR:
             message = "the criterion decreases without bound: bound the search with bounds=(lo, hi)"
-        return _issued(Fit(math.nan, math.inf, (math.nan, math.nan), ok=False, message=message,
-                           warnings=tuple(found), fit_percent=math.nan, residual_rms=math.nan,
-                           noise_std=math.nan, offsets=tuple(0.0 for _ in shapes), fitted=empty,
-                           residuals=empty, **common))  # fmt: skip
+        else:
+            message = (
+                "the criterion has no local minimum within the bounds (it is flat along some "
+                "direction there): the data do not determine the unknowns"
+            )
+        none = math.nan if SCALAR else np.full(count_, math.nan)
+        infinite = math.inf if SCALAR else np.full(count_, math.inf)
+        return _issued(Fit(none, infinite, (none, none) if SCALAR else np.stack([none] * 2, 1),
+                           ok=False, message=message, warnings=tuple(found_),
+                           fit_percent=math.nan, residual_rms=math.nan, noise_std=math.nan,
+                           offsets=tuple(0.0 for _ in shapes), fitted=empty, residuals=empty,
+                           covariance=np.full((count_, count_), math.nan), **common))  # fmt: skip
     with np.errstate(all="ignore"):
         parts = records.validate(Theta, k, method, c, beta, settings, keep)
         count = sum(shape.samples for shape in shapes)
         rss = sum(part.rss for part in parts)
-        dof = count - sum(part.nuisances for part in parts) - 1
+        dof = count - sum(part.nuisances for part in parts) - count_
         variance = rss / dof if dof > 0 else math.nan
         information = sum(part.information for part in parts)  # matrices over the unknowns
         if method == "iv":  # the output-error covariance (a sandwich, for the weights)
             bread, meat = information, sum(part.spread for part in parts)
         else:  # least squares: J'' around how the noise moves J'
-            curvature = _value(coefficients[2:] * np.arange(2, 2 * N + 1) * np.arange(1, 2 * N), k)
-            bread, meat = np.atleast_2d(curvature), sum(part.influence for part in parts)
+            bread, meat = _criterion_curvature(coefficients, k), sum(part.influence for part in parts)
         identifiable = bool(np.all(np.linalg.eigvalsh(information) > 0))
         inverse = np.linalg.pinv(bread)
         covariance = variance * inverse @ meat @ inverse.T
-        k_se = math.sqrt(covariance[0, 0]) if covariance[0, 0] >= 0 else math.nan
+        variances = np.diag(covariance)
+        k_se = np.sqrt(np.where(variances >= 0, variances, math.nan))
         deviations = sum(part.deviations for part in parts)
         fit_percent = 100.0 * (1.0 - math.sqrt(rss / deviations)) if deviations > 0 else math.nan
-    ok, message = True, f"{method}: k = {k:.6g} +- {k_se:.3g} (standard error)"
-    if not (identifiable and np.isfinite(k_se)):
-        ok, k_se = False, math.inf
-        message = f"{UNKNOWN} is not identifiable from these data: the output does not depend on it"
-    elif k_se > POORLY_DETERMINED * abs(k):
-        found.append(
-            f"{UNKNOWN} is poorly determined by these data: k_se = {k_se:.3g} is "
-            f"{100 * k_se / abs(k) if k else math.inf:.3g} % of k (the criterion is nearly flat "
-            "in k); a longer record or a richer input (a PRBS, a multisine) would help"
-        )
-    share = float(information[0, 0] / sum(part.free_information for part in parts)[0, 0])
+    ok = True
+    if SCALAR:
+        k_se = float(k_se[0])
+        message = f"{method}: k = {k:.6g} +- {k_se:.3g} (standard error)"
+    else:
+        message = f"{method}: " + ", ".join(
+            f"{name} = {value:.6g} +- {se:.3g}" for name, value, se in zip(UNKNOWNS, k, k_se, strict=True)
+        ) + " (standard errors)"
+    if not (identifiable and np.all(np.isfinite(k_se))):
+        ok, k_se = False, (math.inf if SCALAR else np.full(count_, math.inf))
+        if SCALAR:
+            message = f"{UNKNOWN} is not identifiable from these data: the output does not depend on it"
+        else:
+            message = (
+                f"the unknowns {', '.join(UNKNOWNS)} are not identifiable from these data: the "
+                "output depends on fewer combinations of them than there are unknowns (the "
+                "information matrix is singular)"
+            )
+    else:
+        for name, value, se in zip(UNKNOWNS, np.atleast_1d(k), np.atleast_1d(k_se), strict=True):
+            if se <= POORLY_DETERMINED * abs(value):
+                continue
+            share = f"{100 * se / abs(value) if value else math.inf:.3g} %"
+            found_.append(
+                f"{UNKNOWN} is poorly determined by these data: k_se = {se:.3g} is {share} of k "
+                "(the criterion is nearly flat in k); a longer record or a richer input (a PRBS, "
+                "a multisine) would help"
+                if SCALAR
+                else f"{name} is poorly determined by these data: its standard error {se:.3g} is "
+                f"{share} of its estimate {value:.6g} (the criterion is nearly flat along it); "
+                "a longer record or a richer input (a PRBS, a multisine) would help"
+            )
+    shares = np.diag(information) / np.diag(sum(part.free_information for part in parts))
+    share, which = float(np.min(shares)), UNKNOWNS[int(np.argmin(shares))]
     if nuisances and not idle and 0 < share < 0.01:
-        found.append(
+        found_.append(
             f"the offset and initial state take {100 * (1 - share):.3g} % of the "
-            f"information about {UNKNOWN} (the input's response looks like theirs, as a step "
+            f"information about {which} (the input's response looks like theirs, as a step "
             "at the first sample does); if the record starts at rest and without offset, fit "
             "with offset=False, initial_state=False"
         )
     if ok and not idle and _excitation(last_moments, Theta) < EXCITATION:
-        found.append(
+        found_.append(
             "the input does not excite the system enough for this model: the moments of the "
             f"filtered signals are singular to 1 part in {1 / EXCITATION:.0e}; a richer input "
             "(a PRBS, a multisine) would determine k better"
         )
     if ok:
-        for other in minima[np.abs(minima - k) > 1e-6 * max(abs(k), 1e-300)]:
+        points = np.reshape(minima, (len(minima), len(UNKNOWNS)))
+        distance = np.abs(points - np.reshape(k, -1)).max(1)
+        for other in minima[distance > 1e-6 * max(float(np.max(np.abs(k))), 1e-300)]:
             extra = records.residual_sum(Theta, other, settings) - rss
             if extra < MARGIN * variance:
-                found.append(
-                    f"another local minimum, {UNKNOWN} = {other:.6g}, fits the data "
+                found_.append(
+                    f"another local minimum, {_named_point(other)}, fits the data "
                     f"{'better' if extra < 0 else 'nearly as well'} (its residual sum of squares "
                     f"differs from the estimate's by {extra / variance:+.3g} noise variances): the "
                     "data cannot tell them apart; narrow the bounds or use a richer input"
                 )
     if dof < 10:
-        found.append(
-            f"only {count} samples for k and {count - dof - 1} nuisance parameter(s): the noise "
-            f"level and k_se rest on {dof} residual degree(s) of freedom and mean little"
+        found_.append(
+            f"only {count} samples for k and {count - dof - count_} nuisance parameter(s): the "
+            f"noise level and k_se rest on {dof} residual degree(s) of freedom and mean little"
         )
-    a = np.trim_zeros((Theta @ k ** np.arange(N + 1))[n::-1], "f")
+    a = np.trim_zeros((Theta @ _K(k))[n::-1], "f")
     sizes = np.abs(np.roots(a)) if a.size > 1 else np.zeros(0)
     sizes = sizes[sizes > 0]  # an integrator has no time constant
     slowest = 1.0 / sizes.min() if sizes.size else 0.0
     span = max(shape.span for shape in shapes)
     if span < 0.5 * slowest:
-        found.append(
+        found_.append(
             f"the record is short: it spans {span:.3g}, under half the slowest time constant "
             f"of the fitted model ({slowest:.3g}), so the data see little of its dynamics"
         )
-    for side, value in (("lower", bounds[0]), ("upper", bounds[1])):
-        if k == value:
-            found.append(
-                f"{UNKNOWN} = {k:.6g} is at the {side} bound: the criterion's minimum may lie "
-                "outside the bounds"
-            )
+    for name, value, (lo, hi) in zip(UNKNOWNS, np.atleast_1d(k), np.reshape(bounds, (-1, 2)),
+                                     strict=True):  # fmt: skip
+        for side, bound in (("lower", lo), ("upper", hi)):
+            if value == bound:
+                found_.append(
+                    f"{name} = {value:.6g} is at the {side} bound: the criterion's minimum may "
+                    "lie outside the bounds"
+                )
+    if found is not None and not found.certified:
+        found_.append(
+            "the global search could not prove, within its budget, that no point within the "
+            "bounds fits better than the estimate (the criterion is nearly flat along some "
+            "direction there): the estimate is the lowest minimum found"
+        )
     spread = math.sqrt(deviations / count)
     whiteness = sum(part.whiteness for part in parts)
     lags = WHITENESS_LAGS * len(parts)
     noisy = math.sqrt(rss / count) > CLEAN * spread  # not noise-free data (its rounding)
     if ok and noisy and whiteness > lags + WHITENESS_LEVEL * math.sqrt(2 * lags):
-        found.append(
+        found_.append(
             f"the residuals are far from white (Ljung-Box Q = {whiteness:.3g} over {lags} lags, "
             f"about {lags} if white): the model, the hold, an offset or the noise is not as "
             "assumed, and k_se may be too small"
         )
+    ci = (k - Z95 * k_se, k + Z95 * k_se)
     return _issued(Fit(
-        k, k_se, (k - Z95 * k_se, k + Z95 * k_se), ok=ok, message=message, warnings=tuple(found),
-        fit_percent=fit_percent, residual_rms=math.sqrt(rss / count),
+        k, k_se, ci if SCALAR else np.stack(ci, 1), ok=ok, message=message,
+        warnings=tuple(found_), fit_percent=fit_percent, residual_rms=math.sqrt(rss / count),
         noise_std=math.sqrt(variance) if variance >= 0 else math.nan,
         offsets=tuple(part.offset for part in parts),
         fitted=tuple(part.fitted for part in parts) if keep else (),
-        residuals=tuple(part.residuals for part in parts) if keep else (), **common,
+        residuals=tuple(part.residuals for part in parts) if keep else (),
+        covariance=covariance, **common,
     ))  # fmt: skip
 
 
@@ -2495,26 +3215,27 @@ class Tracker:
     """
 
     def __init__(self, *, k0, beta=0.1, S0=1e-4, C=None, hold="linear", bounds=None, **known):
-        k0 = _real("k0", k0)
+        k0 = _point("k0", k0)
         beta = _positive("beta", beta, allow_zero=True)
-        S0 = _positive("S0", S0)
+        S0 = _prior_weights(S0)
         _choice("hold", hold, HOLDS)
-        self.bounds = _bounds(bounds)
+        self.bounds = _bounds(bounds, required=False)
         self._run = _Run(_Setup.of(theta(**known), filter_polynomial(C), beta, hold), k0, S0)
         self._global = None
 
-    def update(self, t, u, y) -> float:
+    def update(self, t, u, y):
         """Take the next sample(s) (numbers, or equal-length arrays, after the last) and
-        return the current estimate k^."""
+        return the current estimate k^ (several unknowns: a vector)."""
         arrays = _signals(("t", t), ("u", u), ("y", y), minimum=1, after=self._run.t)
         self._run.advance(*arrays)
         self._global = None
         return self.k
 
     @property
-    def k(self) -> float:
-        """The current estimate k^ (frozen where the run stopped, see `ok`)."""
-        return float(self._run.khat)
+    def k(self):
+        """The current estimate k^ (frozen where the run stopped, see `ok`; several unknowns:
+        a vector in the order of UNKNOWNS)."""
+        return float(self._run.khat) if SCALAR else self._run.khat.copy()
 
     @property
     def t(self) -> float | None:
@@ -2522,12 +3243,19 @@ class Tracker:
         return None if self._run.t == -math.inf else float(self._run.t)
 
     @property
-    def global_k(self) -> float:
-        """The global minimiser of the current cost J(., t) within the bounds."""
+    def global_k(self):
+        """The global minimiser of the current cost J(., t) within the bounds (several
+        unknowns: within the bounds or the default box, NaN without one)."""
         if self._global is None:
             run = self._run
-            self._global = float(_global_minimisers(run.taylor, run.khat, self.bounds)[0])
-        return self._global
+            if SCALAR:
+                self._global = float(_global_minimisers(run.taylor, run.khat, self.bounds)[0])
+            elif self.bounds is None:
+                self._global = np.full(len(UNKNOWNS), np.nan)
+            else:
+                found = _search(run.taylor, run.khat, self.bounds, [run.khat])
+                self._global = found.points[0] if len(found.points) else np.full(len(UNKNOWNS), np.nan)
+        return self._global if SCALAR else self._global.copy()
 
     @property
     def ok(self) -> bool:
@@ -2599,6 +3327,41 @@ def _assignment(text: str) -> tuple[str, float]:
     return name.strip(), _real(name.strip(), value)
 
 
+def _point_option(text: str | None):
+    """--k0: a number (one unknown) or NAME=VALUE,... (each unknown by name), as k is given
+    to the functions (which check it)."""
+    if text is None or "=" not in text:
+        return None if text is None else _real("--k0", text)
+    found = {}
+    for part in text.split(","):
+        name, value = _assignment(part)
+        if name in found:
+            raise ValueError(f"--k0: {name} is given twice in {text!r}")
+        found[name] = value
+    return found
+
+
+def _bounds_option(values: list[str] | None):
+    """--bounds LO HI, LO:HI (one unknown) or NAME=LO:HI,... (several), as `bounds` is given
+    to the functions (which check it)."""
+    if values is None:
+        return None
+    if len(values) == 2 and all(_NUMBER.fullmatch(value.strip()) for value in values):
+        return _real("--bounds LO", values[0]), _real("--bounds HI", values[1])
+    found = {}
+    for part in ",".join(values).split(","):
+        name, equals, interval = part.rpartition("=")
+        low, colon, high = interval.partition(":")
+        if not colon:
+            raise ValueError(f"--bounds takes LO HI, LO:HI or NAME=LO:HI,..., not {part!r}")
+        found[name.strip() if equals else None] = (_real("--bounds LO", low), _real("--bounds HI", high))
+    if list(found) == [None]:
+        return found[None]
+    if None in found:
+        raise ValueError("--bounds: with several intervals, name each: NAME=LO:HI,...")
+    return found
+
+
 def _filter_option(args):
     """C from --filter TEXT or --filter-T T (None: the default)."""
     if args.filter_T is not None:
@@ -2609,7 +3372,7 @@ def _filter_option(args):
 def _parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
         prog=f"{MODEL}.py",
-        description=f"Identify the unknown {UNKNOWN} of {MODEL} from CSV files with a header "
+        description=f"Identify the unknown {UNKNOWN or ', '.join(UNKNOWNS)} of {MODEL} from CSV files with a header "
         "row and columns t, u, y (time, input, output): `fit` (whole records, with a "
         "standard error) or `estimate` (the paper's recursive estimate from k0).",
     )
@@ -2617,7 +3380,8 @@ def _parser() -> argparse.ArgumentParser:
     fit_ = commands.add_parser("fit", help="fit k to whole records (several add)")
     fit_.add_argument("data", nargs="+", help="CSV file(s), one per experiment")
     fit_.add_argument("--method", choices=FIT_METHODS, default="iv", help="iv (default) or ls")
-    fit_.add_argument("--k0", type=float, help="start of the iterations (default: least squares)")
+    fit_.add_argument("--k0", metavar="V|NAME=V,...",
+                      help="start of the iterations (default: least squares)")  # fmt: skip
     fit_.add_argument("--offset", action=argparse.BooleanOptionalAction, default=True,
                       help="estimate an output offset (default on)")  # fmt: skip
     fit_.add_argument("--initial-state", action=argparse.BooleanOptionalAction, default=True,
@@ -2625,7 +3389,8 @@ def _parser() -> argparse.ArgumentParser:
     fit_.add_argument("--beta", type=float, default=0.0, help="forgetting factor (0)")
     estimate_ = commands.add_parser("estimate", help="the paper's recursive estimate from k0")
     estimate_.add_argument("data", help="the CSV file")
-    estimate_.add_argument("--k0", type=float, nargs="+", required=True, help="initial estimate(s)")
+    estimate_.add_argument("--k0", nargs="+", required=True, metavar="V|NAME=V,...",
+                           help="initial estimate(s); several unknowns: each by name")  # fmt: skip
     estimate_.add_argument("--beta", type=float, default=0.1, help="forgetting factor (0.1)")
     estimate_.add_argument("--S0", type=float, default=1e-4, help="initial cost weight (1e-4)")
     estimate_.add_argument("--engine", choices=ENGINES, default="moments", help="the algorithm")
@@ -2639,8 +3404,9 @@ def _parser() -> argparse.ArgumentParser:
                            f"(default {default or '(1 + s)^(n+1)'})")  # fmt: skip
         shape.add_argument("--filter-T", type=float, metavar="T", help="C(s) = (1 + sT)^(n+1)")
         sub.add_argument("--hold", choices=HOLDS, default="linear", help="input interpolation")
-        sub.add_argument("--bounds", type=float, nargs=2, metavar=("LO", "HI"),
-                         help="search k within [LO, HI]")  # fmt: skip
+        sub.add_argument("--bounds", nargs="+", metavar="LO:HI|NAME=LO:HI,...",
+                         help="search k within [LO, HI] (also LO HI); several unknowns: each "
+                         "by name")  # fmt: skip
         sub.add_argument("--columns", default="t,u,y", metavar="T,U,Y",
                          help="the CSV columns of time, input and output (t,u,y)")  # fmt: skip
         sub.add_argument("--set", action="append", default=[], metavar="NAME=VALUE",
@@ -2660,14 +3426,22 @@ def _fit_main(args, known) -> tuple[dict, list[str], int]:
     columns = _column_names(args.columns)
     records = [read_csv(path, columns) for path in args.data]
     data = [list(part) for part in zip(*records, strict=True)] if len(records) > 1 else records[0]
-    result = fit(*data, method=args.method, C=_filter_option(args), k0=args.k0,
-                 bounds=args.bounds, offset=args.offset, initial_state=args.initial_state,
-                 hold=args.hold, beta=args.beta, **known)  # fmt: skip
+    result = fit(*data, method=args.method, C=_filter_option(args), k0=_point_option(args.k0),
+                 bounds=_bounds_option(args.bounds), offset=args.offset,
+                 initial_state=args.initial_state, hold=args.hold, beta=args.beta, **known)  # fmt: skip
     record = fit_record(result)
-    lines = [
-        f"{UNKNOWN} = {result.k:.6g} +- {result.k_se:.3g} (95 % interval {result.ci[0]:.6g} to "
-        f"{result.ci[1]:.6g}); fit {result.fit_percent:.4g} %, residual RMS {result.residual_rms:.3g}",
-    ]
+    quality = f"fit {result.fit_percent:.4g} %, residual RMS {result.residual_rms:.3g}"
+    if SCALAR:
+        lines = [
+            f"{UNKNOWN} = {result.k:.6g} +- {result.k_se:.3g} (95 % interval {result.ci[0]:.6g} "
+            f"to {result.ci[1]:.6g}); {quality}",
+        ]
+    else:
+        lines = [
+            f"{name} = {value:.6g} +- {se:.3g} (95 % interval {lo:.6g} to {hi:.6g})"
+            for name, value, se, (lo, hi) in zip(UNKNOWNS, result.k, result.k_se, result.ci,
+                                                 strict=True)  # fmt: skip
+        ] + [quality]
     if not result.ok:
         lines.append(f"  {result.message}")
     return record, lines, 0 if result.ok else 1
@@ -2676,35 +3450,47 @@ def _fit_main(args, known) -> tuple[dict, list[str], int]:
 def fit_record(result: Fit) -> dict:
     """A Fit as plain JSON-able values (the --json record of `fit`)."""
 
-    def number(value):
-        value = float(value)
-        return value if math.isfinite(value) else None
-
     return dict(
-        ok=result.ok, k=number(result.k), k_se=number(result.k_se), ci=[number(v) for v in result.ci],
-        fit_percent=number(result.fit_percent), residual_rms=number(result.residual_rms),
-        noise_std=number(result.noise_std), warnings=list(result.warnings),
-        minima=[float(v) for v in result.minima], iterations=result.iterations,
-        method=result.method, offsets=[number(v) for v in result.offsets],
-        filter=[float(v) for v in result.filter], message=result.message,
+        ok=result.ok, unknowns=list(UNKNOWNS), k=_plain(result.k), k_se=_plain(result.k_se),
+        ci=_plain(result.ci), covariance=_plain(result.covariance),
+        fit_percent=_plain(result.fit_percent), residual_rms=_plain(result.residual_rms),
+        noise_std=_plain(result.noise_std), warnings=list(result.warnings),
+        minima=_plain(result.minima), minima_costs=_plain(result.cost(result.minima)),
+        iterations=result.iterations, method=result.method,
+        offsets=[_plain(v) for v in result.offsets], filter=_plain(result.filter),
+        message=result.message,
     )  # fmt: skip
+
+
+def _plain(value):
+    """JSON for numbers, arrays and tuples of them: floats (None where not finite), lists."""
+    if isinstance(value, tuple | list) or np.ndim(value) > 0:
+        return [_plain(part) for part in value]
+    value = float(value)
+    return value if math.isfinite(value) else None
 
 
 def _estimate_main(args, known) -> tuple[dict, list[str], int]:
     t, u, y = read_csv(args.data, _column_names(args.columns))
     options = dict(beta=args.beta, S0=args.S0, C=_filter_option(args), hold=args.hold,
-                   engine=args.engine, bounds=args.bounds, method=args.method, rtol=args.rtol,
-                   atol=args.atol)  # fmt: skip
-    runs = [estimate(t, u, y, k0=k0, **options, **known) for k0 in args.k0]
+                   engine=args.engine, bounds=_bounds_option(args.bounds), method=args.method,
+                   rtol=args.rtol, atol=args.atol)  # fmt: skip
+    starts = [_point("k0", _point_option(text)) for text in args.k0]
+    runs = [estimate(t, u, y, k0=k0, **options, **known) for k0 in starts]
     records, lines = [], []
-    for k0, run in zip(args.k0, runs, strict=True):
-        best = float(run.global_k[-1])
-        records.append(dict(k0=k0, k=run.k, global_k=best if math.isfinite(best) else None,
-                            minima=run.minima().tolist(), ok=run.ok, message=run.message,
+    for k0, run in zip(starts, runs, strict=True):
+        best = run.global_k[-1]
+        minima = run.minima() if SCALAR or run.bounds is not None else np.zeros((0, len(UNKNOWNS)))
+        records.append(dict(k0=_plain(k0), k=_plain(run.k), global_k=_plain(best),
+                            minima=_plain(minima), ok=run.ok, message=run.message,
                             warnings=list(run.warnings)))  # fmt: skip
-        minima = ", ".join(f"{value:.6g}" for value in records[-1]["minima"])
-        lines.append(f"k0 = {k0:g}: {UNKNOWN} = {run.k:.6g}, global minimum at {best:.6g} "
-                     f"(local minima of J: {minima})")  # fmt: skip
+        if SCALAR:
+            shown = ", ".join(f"{value:.6g}" for value in minima)
+            lines.append(f"k0 = {k0:g}: {UNKNOWN} = {run.k:.6g}, global minimum at {best:.6g} "
+                         f"(local minima of J: {shown})")  # fmt: skip
+        else:
+            lines.append(f"k0 ({_shown(k0)}): {_shown(run.k)}; global minimum at "
+                         f"{_shown(best)} ({len(minima)} local minima of J within the bounds)")  # fmt: skip
         if not run.ok or run.informed_until is not None:
             lines.append(f"  {run.message}")
     status = 0 if all(run.ok for run in runs) else 1
@@ -2730,7 +3516,8 @@ def main(argv: list[str] | None = None) -> int:
         if isinstance(error, OSError) and error.filename:
             text = f"{error.filename}: {error.strerror}"
         if args.json:
-            print(json.dumps(dict(ok=False, model=MODEL, unknown=UNKNOWN, error=str(text))))
+            print(json.dumps(dict(ok=False, model=MODEL, unknown=UNKNOWN, unknowns=list(UNKNOWNS),
+                                  error=str(text))))  # fmt: skip
         print(f"{prog}: error: {text}", file=sys.stderr)
         return 2
     for warning in caught:

@@ -3,6 +3,11 @@
 from __future__ import annotations
 
 import os
+
+# BLAS on one thread, before numpy loads it: the estimators' many small matrix products and
+# exponentials stall for a scheduler quantum each when OpenBLAS's threads compete with other
+# processes (see bench/README.md); results are the same, within rounding.
+os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 import subprocess
 import sys
 from dataclasses import dataclass

@@ -41,6 +41,18 @@ def absorber():
     return load("absorber")
 
 
+@pytest.fixture(scope="module")
+def dc_motor():
+    """The DC motor with two unknowns, the armature resistance ra and the load inertia jl."""
+    return load("dc_motor")
+
+
+@pytest.fixture(scope="module")
+def rlc3():
+    """The series RLC circuit with three unknowns r, l and c."""
+    return load("rlc3")
+
+
 def step(t_end: float, dt: float = 0.01) -> tuple[np.ndarray, np.ndarray]:
     t = np.linspace(0.0, t_end, round(t_end / dt) + 1)
     return t, np.ones_like(t)

@@ -61,7 +61,7 @@ def test_set_keep_and_unknowns_choose_the_parameters():
     assert mtt.load(RC, input="Se:v", output="De:vc").output == "De:vc"
 
 
-def test_several_unknowns_in_the_transfer_function_and_theta_not_in_the_estimator():
+def test_several_unknowns_in_the_transfer_function_theta_and_the_estimator():
     motor = mtt.load(mtt.example("dc_motor"))
     ra, jl = sympy.symbols("ra jl")
     # G = km / ((la s + ra)(J s + b) + km^2), J = jm + jl, with la = 1/10, km = jm = 1, b = 1/10
@@ -73,7 +73,10 @@ def test_several_unknowns_in_the_transfer_function_and_theta_not_in_the_estimato
     np.testing.assert_allclose(den / den[0], [1, 8.01 / 0.4, 1.2 / 0.4])
     rc = mtt.load(RC, unknowns="r,c")
     assert rc.unknowns == ("r", "c") and rc.theta.monomials == (1, c * r)
-    assert kind_of(motor.estimator).kind == "several_unknowns"
+    assert motor.estimator().UNKNOWNS == ("ra", "jl") and motor.estimator().TRUE_VALUE == (
+        1.0,
+        10.0,
+    )
     assert kind_of(motor.to_scipy, 1).kind == "bad_argument"
 
 

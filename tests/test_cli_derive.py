@@ -311,12 +311,14 @@ def test_theta_json_of_unknowns_chosen_on_the_command_line(capsys):
     assert (record["monomials"], record["degrees"]) == ([[0], [1]], {"jl": 1})
 
 
-def test_compile_refuses_several_unknowns(capsys, tmp_path):
+def test_compile_writes_an_estimator_of_every_unknown(capsys, tmp_path):
     target = tmp_path / "dc_motor.py"
     status, out, err = run(capsys, "compile", MODELS / "dc_motor.bg", "-o", target)
-    assert status == EXIT_MODEL_ERROR and out == "" and not target.exists()
-    assert err.startswith(f"{MODELS / 'dc_motor.bg'}: error[several_unknowns]: ")
-    assert "(ra, jl): choose one with --unknown NAME" in err
+    assert (
+        status == 0
+        and out == f"wrote {target}: estimator of ra, jl for dc_motor (n = 2, m = 0, N = 2)\n"
+    )
+    assert "UNKNOWNS = ('ra', 'jl')" in target.read_text()
     assert run(capsys, "compile", MODELS / "dc_motor.bg", "-o", target, "--unknown", "jl")[0] == 0
     assert "UNKNOWN = 'jl'" in target.read_text()
 

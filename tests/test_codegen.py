@@ -158,7 +158,7 @@ def test_kept_parameters_without_a_value_must_be_given():
         (dict(symbols=("lambda", "l")), "bad_name"),
         (dict(model="class"), "bad_name"),
         (dict(unknowns=("k-1",)), "bad_name"),
-        (dict(unknowns=("k", "l")), "several_unknowns"),
+        (dict(unknowns=("k", "x"), monomials=((0, 0), (1, 0), (2, 0), (3, 0))), "no_dependence"),
         (dict(monomials=((0,),)), "no_dependence"),
     ],
 )

@@ -77,7 +77,7 @@ def test_dc_drive_fig2_numbers(capsys):
     result = estimates(
         capsys, DC_DRIVE, "--t-end", "10", *PAPER, "--filter", "(1+s)^5", "--k0", "0", "5", "20"
     )
-    assert list(result) == ["ok", "model", "unknown", "runs"] and result["ok"]
+    assert list(result) == ["ok", "model", "unknown", "unknowns", "runs"] and result["ok"]
     assert (result["model"], result["unknown"]) == ("dc_drive", "k")
     for run, k0 in zip(result["runs"], (0.0, 5.0, 20.0), strict=True):
         assert list(run) == ["k0", "filter", "k", "minima", *RUN_KEYS]  # issue 8 added RUN_KEYS
@@ -185,11 +185,11 @@ def test_a_stopped_run_is_reported_with_exit_status_1(capsys):
         (["--k0", "1", "--filter", "(1+s)^4"], "C(s) = '(1+s)^4' has degree 4; it must exceed"),
         (["--k0", "1", "--S0", "0"], "S0 must be > 0"),
         (["--k0", "1", "--beta", "-1"], "beta must be >= 0"),
-        (["--k0", "nan"], "k0 must be finite"),
+        (["--k0", "nan"], "'nan' in 'nan' is not finite"),
         (["--k0", "1", "--dt", "0"], "need 0 < --dt <= --t-end"),
         (["--k0", "1", "--noise-uniform", "-1"], "--noise-uniform must be >= 0"),
         (["--k0", "1", "--cost-plot", "c.png", "--cost-range", "1", "0"], "needs A < B"),
-        (["--k0", "1", "--data", "d.csv", "--k", "3"], "--data and --k do not go together"),
+        (["--k0", "1", "--data", "d.csv", "--k", "3"], "--data and --true do not go together"),
         (["--k0", "1", "--data", "missing.csv"], "missing.csv: No such file or directory"),
         (["--k0", "1", "--signal", "bad.csv"], "bad.csv:1: no column 'u' (the header names t, v)"),
         (["--k0", "1", "--data", "nan.csv"], "nan.csv:3: column 'y' holds 'nan', not a number"),
@@ -248,7 +248,9 @@ def test_engines_and_bounds_from_the_command_line(capsys):
     bounded = estimates(capsys, *ABSORBER_DATA, "--k0", "1", "--bounds", "-1", "0")
     assert bounded["runs"][0]["global_k"] == pytest.approx(-0.232, abs=1e-3)
     status, _, err = mtt(capsys, "estimate", *ABSORBER_DATA, "--k0", "1", "--bounds", "1", "0")
-    assert status == 2 and "bounds must be (lo, hi) with lo < hi, not (1.0, 0.0)" in err
+    assert status == 2 and "argument --bounds: '1:0' in '1 0': LO must be below HI" in err
+    spelled = estimates(capsys, *ABSORBER_DATA, "--k0", "1", "--bounds=-1:0")
+    assert spelled["runs"][0]["global_k"] == bounded["runs"][0]["global_k"]
 
 
 # mtt fit -------------------------------------------------------------------------------
@@ -382,7 +384,7 @@ def test_json_results_say_ok(tmp_path, capsys):
     status, out, _ = mtt(capsys, "compile", DC_DRIVE, "-o", str(tmp_path), "--json")
     assert status == 0 and json.loads(out) == {
         "ok": True, "path": str(tmp_path / "dc_drive.py"), "model": "dc_drive", "unknown": "k",
-        "n": 4, "m": 2, "N": 1, "kept": [],
+        "unknowns": ["k"], "n": 4, "m": 2, "N": 1, "kept": [],
     }  # fmt: skip
     status, out, _ = mtt(capsys, "simulate", DC_DRIVE, "--t-end", "1", "--dt", "0.5", "--json")
     record = json.loads(out)

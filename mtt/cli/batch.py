@@ -73,7 +73,7 @@ def mode(args) -> str | None:
 def cmd_fit_many(args, kind: str) -> int:
     from mtt.batch import api
     from mtt.cli.experiment import EXIT_OK, EXIT_STOPPED, UsageError, _columns, checked_module
-    from mtt.cli.fitting import _filter
+    from mtt.cli.fitting import options
     from mtt.cli.options import choice_from_args
     from mtt.derivation import pipeline
     from mtt.estimator import codegen
@@ -91,16 +91,13 @@ def cmd_fit_many(args, kind: str) -> int:
         )
     found = api.from_source(codegen.render(pipeline.theta_for(args.file, choice_from_args(args))))
     module = checked_module(found.module)
-    options = dict(method=args.method, C=_filter(args), k0=args.k0, bounds=args.bounds,
-                   offset=args.offset, initial_state=args.initial_state, hold=args.hold,
-                   beta=args.beta)  # fmt: skip
     client = _client(args.scheduler) if args.scheduler else None
     try:
         with _bar(len(args.data), kind) as bar:
             batch = api.fit_many(
                 found, args.data, executor=client, jobs=None if client else (args.jobs or 1),
                 pooled=kind == "pooled", columns=_columns(args.columns),
-                progress=lambda done, total: bar.update(done - bar.n), **options,
+                progress=lambda done, total: bar.update(done - bar.n), **options(module, args),
             )  # fmt: skip
     except MttError as error:
         raise UsageError(str(error)) from None
@@ -115,7 +112,7 @@ def cmd_fit_many(args, kind: str) -> int:
         return _pooled(module, args, batch)
     _warnings(batch)
     if args.csv:
-        codegen.write_atomic(args.csv, _table_csv(batch))
+        codegen.write_atomic(args.csv, _table_csv(module, batch))
     if args.json:
         print(json.dumps({"ok": batch.ok, "records": [o.record() for o in batch]}))
     else:
@@ -177,11 +174,16 @@ def _pooled(module, args, batch) -> int:
     return EXIT_OK if result.ok else EXIT_STOPPED
 
 
-def _cells(outcome) -> tuple[str, ...]:
-    result = outcome.result
+def _cells(module, outcome) -> tuple[str, ...]:
+    """A record's row: its estimate and standard error (each unknown's), fit, warnings."""
+    import numpy as np
+
+    result, count = outcome.result, len(module.UNKNOWNS)
     if outcome.error is not None:
-        return (outcome.name, "", "", "", "", "failed (the error is on stderr)")
-    return (outcome.name, f"{result.k:.6g}", f"{result.k_se:.3g}", f"{result.fit_percent:.4g}",
+        return (outcome.name, *[""] * (2 * count), "", "", "failed (the error is on stderr)")
+    pairs = zip(np.atleast_1d(result.k), np.atleast_1d(result.k_se), strict=True)
+    estimates = (cell for k, se in pairs for cell in (f"{k:.6g}", f"{se:.3g}"))
+    return (outcome.name, *estimates, f"{result.fit_percent:.4g}",
             str(len(result.warnings) or ""), "")  # fmt: skip
 
 
@@ -191,28 +193,38 @@ def _table(module, args, batch) -> str:
     where = (f"on {args.scheduler}" if args.scheduler else
              f"{args.jobs} processes" if (args.jobs or 1) > 1 else "in this process")  # fmt: skip
     method = "refined instrumental variables" if args.method == "iv" else "least squares"
-    header = ("file", module.UNKNOWN, "k_se", "fit %", "warnings", "")
+    if len(module.UNKNOWNS) == 1:
+        estimates = (module.UNKNOWN, "k_se")
+    else:
+        estimates = tuple(part for name in module.UNKNOWNS for part in (name, f"{name} k_se"))
+    header = ("file", *estimates, "fit %", "warnings", "")
     fitted = len(batch) - len(batch.errors)
     return "\n".join([
         f"{module.MODEL}: {len(batch)} records, one fit each ({method}, {where})",
-        *_rows([header, *(_cells(outcome) for outcome in batch)]),
+        *_rows([header, *(_cells(module, outcome) for outcome in batch)]),
         f"  {fitted} of {len(batch)} records fitted" + (f"; {len(batch.errors)} failed"
                                                          if batch.errors else ""),
     ])  # fmt: skip
 
 
-def _table_csv(batch) -> str:
+def _table_csv(module, batch) -> str:
+    """One row per record; several unknowns: k, k_se, ci_low and ci_high of each, named."""
+    import numpy as np
+
     from mtt.cli.experiment import _csv_text
 
-    header = ["file", "k", "k_se", "ci_low", "ci_high", "fit_percent", "residual_rms",
-              "iterations", "warnings", "error"]  # fmt: skip
+    names = [""] if len(module.UNKNOWNS) == 1 else [f"_{name}" for name in module.UNKNOWNS]
+    estimates = [f"{part}{name}" for name in names for part in ("k", "k_se", "ci_low", "ci_high")]
+    header = ["file", *estimates, "fit_percent", "residual_rms", "iterations", "warnings", "error"]
     rows = []
     for outcome in batch:
         result = None if outcome.error else outcome.result
-        numbers = ("", "", "", "", "", "", "")
+        numbers = ("",) * (len(estimates) + 3)
         if result is not None:
-            numbers = (result.k, result.k_se, *result.ci, result.fit_percent,
-                       result.residual_rms, result.iterations)  # fmt: skip
+            columns = zip(np.atleast_1d(result.k), np.atleast_1d(result.k_se),
+                          np.reshape(result.ci, (-1, 2)), strict=True)  # fmt: skip
+            numbers = (*(v for k, se, (lo, hi) in columns for v in (k, se, lo, hi)),
+                       result.fit_percent, result.residual_rms, result.iterations)  # fmt: skip
         warnings = " | ".join(outcome.result.warnings) if outcome.result is not None else ""
         rows.append((outcome.name, *numbers, warnings, outcome.error or ""))
     return _csv_text(header, rows)

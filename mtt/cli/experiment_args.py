@@ -11,7 +11,7 @@ import argparse
 from collections.abc import Callable
 
 from mtt.cli import batch
-from mtt.cli.options import add_parameter_options
+from mtt.cli.options import BoundsAction, add_parameter_options, named_values
 
 DEFAULT_T_END, DEFAULT_DT, DEFAULT_SEED = 10.0, 0.01, 0
 
@@ -62,7 +62,15 @@ def _data_options(parser: argparse.ArgumentParser, measured: bool) -> None:
     )
     group.add_argument("--t-end", type=float, help=f"duration (default {DEFAULT_T_END:g})")
     group.add_argument("--dt", type=float, help=f"sampling interval (default {DEFAULT_DT:g})")
-    group.add_argument("--k", type=float, help="true value of the unknown (default: the file's)")
+    group.add_argument(
+        "--true",
+        "--k",
+        dest="true",
+        type=named_values,
+        metavar="V|NAME=V,...",
+        help="the unknowns' true values: a number for one unknown, each by name for several "
+        "(ra=1,jl=10); default: the file's",
+    )
     noise = group.add_mutually_exclusive_group()
     noise.add_argument(
         "--noise-uniform", type=float, metavar="A", help="add noise uniform in [-A, A] to y"
@@ -113,7 +121,7 @@ def register(commands) -> None:
         "compile",
         help="write the estimator module of a model",
         description="Write a standalone Python module (numpy and scipy only) that identifies "
-        "the model's unknown parameter from input/output data.",
+        "the model's unknown parameters from input/output data.",
     )
     compile_.add_argument("file", metavar="FILE")
     compile_.add_argument(
@@ -145,7 +153,7 @@ def register(commands) -> None:
 
     estimate = commands.add_parser(
         "estimate",
-        help="identify the unknown from data (measured or simulated)",
+        help="identify the unknown(s) from data (measured or simulated)",
         description="Run the generated estimator once per starting value and filter; print "
         "the final estimates, the local minima of the cost and its global minimum (a warning "
         "says when the estimate is not there). Exit status 1 if a run stopped early (the "
@@ -156,7 +164,13 @@ def register(commands) -> None:
     _data_options(estimate, measured=True)
     group = estimate.add_argument_group("estimator")
     group.add_argument(
-        "--k0", type=float, nargs="+", required=True, metavar="V", help="initial estimate(s)"
+        "--k0",
+        type=named_values,
+        nargs="+",
+        required=True,
+        metavar="V|NAME=V,...",
+        help="initial estimate(s): numbers for one unknown; for several, each start by name "
+        "(--k0 ra=0.5,jl=5 ra=2,jl=20)",
     )
     group.add_argument("--beta", type=float, default=0.1, help="forgetting factor (default 0.1)")
     weight = group.add_mutually_exclusive_group()
@@ -177,10 +191,12 @@ def register(commands) -> None:
     )
     group.add_argument(
         "--bounds",
-        type=float,
-        nargs=2,
-        metavar=("LO", "HI"),
-        help="look for the global minimum of J within [LO, HI] (default: everywhere)",
+        action=BoundsAction,
+        nargs="+",
+        metavar="LO:HI|NAME=LO:HI,...",
+        help="look for the global minimum of J within LO:HI (also LO HI; --bounds=-1:1 for a "
+        "negative LO); several unknowns: each by name, the others within a factor 10 of the "
+        "file's value (default: everywhere; several unknowns: that box)",
     )
     group.add_argument("--rtol", type=float, default=1e-6, help="the ODE's relative tolerance")
     group.add_argument("--atol", type=float, default=1e-9, help="the ODE's absolute tolerance")
@@ -192,12 +208,12 @@ def register(commands) -> None:
     )
     outputs.add_argument("--csv", metavar="FILE", help="write the trajectories as CSV")
     outputs.add_argument("--json", action="store_true", help="print the results as JSON")
-    estimate.set_defaults(run=_implementation("cmd_estimate"))
+    estimate.set_defaults(run=_implementation("cmd_estimate", "estimating"))
 
     fit = commands.add_parser(
         "fit",
-        help="fit the unknown to whole records, with its uncertainty",
-        description="Fit the unknown to whole records (measured, several --data combined, or "
+        help="fit the unknown(s) to whole records, with their uncertainty",
+        description="Fit the unknown(s) to whole records (measured, several --data combined, or "
         "simulated) with the generated module's `fit`: refined instrumental variables by "
         "default (unbiased under output noise), offsets and initial state estimated; print "
         "the estimate, its standard error and 95 % interval, the fit and every warning. "
@@ -215,10 +231,18 @@ def register(commands) -> None:
     )
     _filter_options(group, several=False, default="auto")
     group.add_argument(
-        "--k0", type=float, help="where the iterations start (default: least squares)"
+        "--k0",
+        type=named_values,
+        metavar="V|NAME=V,...",
+        help="where the iterations start (default: least squares); several unknowns: by name",
     )
     group.add_argument(
-        "--bounds", type=float, nargs=2, metavar=("LO", "HI"), help="look for k within [LO, HI]"
+        "--bounds",
+        action=BoundsAction,
+        nargs="+",
+        metavar="LO:HI|NAME=LO:HI,...",
+        help="look for k within LO:HI (also LO HI); several unknowns: each by name, the others "
+        "within a factor 10 of the file's value (the default box); one unknown: everywhere",
     )
     group.add_argument(
         "--offset",

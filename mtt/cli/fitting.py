@@ -9,6 +9,9 @@ from __future__ import annotations
 
 import json
 
+import numpy as np
+
+from mtt.cli import unknowns
 from mtt.cli.experiment import (
     EXIT_OK,
     EXIT_STOPPED,
@@ -20,6 +23,16 @@ from mtt.cli.experiment import (
     warn,
 )
 from mtt.estimator import codegen
+
+
+def options(module, args) -> dict:
+    """The module's `fit` options from the command line (k0 and bounds by unknown)."""
+    return dict(
+        method=args.method, C=_filter(args),
+        k0=None if args.k0 is None else unknowns.point(module, args.k0, "--k0"),
+        bounds=unknowns.bounds(module, args.bounds), offset=args.offset,
+        initial_state=args.initial_state, hold=args.hold, beta=args.beta,
+    )  # fmt: skip
 
 
 def _filter(args):
@@ -42,10 +55,7 @@ def cmd_fit(args) -> int:
     arrays = [[getattr(data, name) for data in records] for name in ("t", "u", "y")]
     if len(records) == 1:
         arrays = [part[0] for part in arrays]
-    result = module.fit(
-        *arrays, method=args.method, C=_filter(args), k0=args.k0, bounds=args.bounds,
-        offset=args.offset, initial_state=args.initial_state, hold=args.hold, beta=args.beta,
-    )  # fmt: skip
+    result = module.fit(*arrays, **options(module, args))
     warn("fit", result.warnings)
     if args.plot and result.ok:
         from mtt.cli import plots  # matplotlib takes a quarter second to import: only plotting pays
@@ -56,8 +66,7 @@ def cmd_fit(args) -> int:
         ]
         plots.fit(
             args.plot, shown, output_label=signal_label(module, "output"), dpi=args.dpi,
-            title=f"{module.MODEL}: {module.UNKNOWN} = {result.k:.6g} \u00b1 {result.k_se:.3g}, "
-            f"fit {result.fit_percent:.4g} %",
+            title=f"{module.MODEL}: {_estimates(module, result)}, fit {result.fit_percent:.4g} %",
         )  # fmt: skip
     elif args.plot:
         warn("fit", [f"no plot: {result.message}"])
@@ -79,8 +88,17 @@ def cmd_fit(args) -> int:
     return EXIT_OK if result.ok else EXIT_STOPPED
 
 
+def _estimates(module, result) -> str:
+    """`k = 10 ± 0.02`, or `ra = 1 ± 0.01, jl = 10 ± 0.2` for several unknowns."""
+    return ", ".join(
+        f"{name} = {value:.6g} \u00b1 {se:.3g}"
+        for name, value, se in zip(
+            module.UNKNOWNS, np.atleast_1d(result.k), np.atleast_1d(result.k_se), strict=True
+        )  # fmt: skip
+    )
+
+
 def _text(module, records, result) -> str:
-    name = module.UNKNOWN
     sources = "; ".join(data.note for data in records)
     lines = [f"{module.MODEL}: {sources}"]
     if not result.ok:
@@ -88,13 +106,26 @@ def _text(module, records, result) -> str:
         return "\n".join(lines)
     method = "refined instrumental variables" if result.method == "iv" else "least squares"
     steps = f", {result.iterations} iterations" if result.method == "iv" else ""
+    intervals = np.reshape(result.ci, (-1, 2))
     lines += [
-        f"  {name} = {result.k:.6g} \u00b1 {result.k_se:.3g} (standard error; 95 % interval "
-        f"{result.ci[0]:.6g} to {result.ci[1]:.6g})",
+        f"  {name} = {value:.6g} \u00b1 {se:.3g} (standard error; 95 % interval "
+        f"{low:.6g} to {high:.6g})"
+        for name, value, se, (low, high) in zip(
+            module.UNKNOWNS,
+            np.atleast_1d(result.k),
+            np.atleast_1d(result.k_se),
+            intervals,
+            strict=True,
+        )  # fmt: skip
+    ]
+    if len(module.UNKNOWNS) == 1:
+        minima = ", ".join(f"{value:.6g}" for value in result.minima)
+    else:
+        minima = "; ".join(f"({unknowns.text(module, point, '.6g')})" for point in result.minima)
+    lines += [
         f"  fit {result.fit_percent:.4g} %, residual RMS {result.residual_rms:.3g}, "
         f"noise std {result.noise_std:.3g}",
-        f"  method: {method}{steps}; local minima of the criterion: "
-        + ", ".join(f"{value:.6g}" for value in result.minima),
+        f"  method: {method}{steps}; local minima of the criterion: {minima}",
     ]
     if any(result.offsets):
         lines.append("  output offset at rest: " + ", ".join(f"{v:.6g}" for v in result.offsets))

@@ -192,3 +192,33 @@ def in_unknowns_order(given, unknowns: tuple[str, ...], option: str, complete: b
     if complete and missing:
         raise MttError(f"{option}: no value for {', '.join(missing)}", kind="bad_value")
     return tuple(given.get(name) for name in unknowns)
+
+
+class BoundsAction(argparse.Action):
+    """--bounds with nargs="+": `LO HI` (two bare numbers, the first spelling, one unknown),
+    or `named_bounds` values (`LO:HI`; `a=LO:HI,b=LO:HI`, also over several words)."""
+
+    def __call__(self, parser, namespace, values, option_string=None) -> None:
+        try:
+            setattr(namespace, self.dest, _bounds_words(values))
+        except argparse.ArgumentTypeError as exc:
+            parser.error(f"argument {option_string}: {exc}")
+
+
+def _bounds_words(words: list[str]) -> NamedBounds:
+    if len(words) == 2 and all(":" not in word and "=" not in word for word in words):
+        return _interval(":".join(words), " ".join(words))
+    found: dict = {}
+    for word in words:
+        given = named_bounds(word)
+        if not isinstance(given, dict):
+            if len(words) > 1:
+                raise argparse.ArgumentTypeError(
+                    f"give one interval LO:HI, or each unknown's by name, not {' '.join(words)!r}"
+                )
+            return given
+        repeated = sorted(set(found) & set(given))
+        if repeated:
+            raise argparse.ArgumentTypeError(f"{repeated[0]} is given twice")
+        found |= given
+    return found

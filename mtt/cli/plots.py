@@ -34,13 +34,14 @@ class Curve:
     t: np.ndarray
     khat: np.ndarray
     minima: np.ndarray  # local minima of the cost at the last time
-    normalised_cost: object  # k -> (J(k) - J(k^)) / J_2(k^) at the last time
+    normalised_cost: object  # k -> (J(k) - J(k^)) / J_2(k^) at the last time (one unknown)
     global_k: np.ndarray  # the global minimiser of the cost at each time
     band: np.ndarray | None = None  # half-width of an approximate 95 % band about khat
 
 
 def _figure(heights: tuple[int, ...] = (1,)) -> tuple[Figure, list]:
-    figure = Figure(figsize=(7.0, 4.2 if len(heights) == 1 else 5.6), layout="constrained")
+    size = 4.2 if len(heights) == 1 else 5.6 if len(heights) == 2 else 2.4 * len(heights)
+    figure = Figure(figsize=(7.0, size), layout="constrained")
     FigureCanvasAgg(figure)
     axes = figure.subplots(len(heights), 1, sharex=True, squeeze=False, height_ratios=heights)
     axes = axes[:, 0]
@@ -63,39 +64,53 @@ def estimates(
     curves: Sequence[Curve],
     *,
     title: str,
-    unknown: str,
-    true_value: float | None,
+    unknowns: Sequence[str],
+    true_value,
     dpi: float = 120.0,
 ) -> None:
     """The estimate against time, one line per run (the paper's Figs. 2, 6 and 7), its
     approximate 95 % band shaded, and, dotted where it differs from the estimate, the
-    global minimiser of the cost."""
-    figure, (ax,) = _figure()
-    for curve in curves:
-        (line,) = ax.plot(curve.t, curve.khat, label=curve.label, linewidth=1.4)
-        if curve.band is not None:
-            ax.fill_between(curve.t, curve.khat - curve.band, curve.khat + curve.band,
-                            color=line.get_color(), alpha=0.15, linewidth=0)  # fmt: skip
-        apart = np.abs(curve.global_k - curve.khat) > 1e-6 * (np.abs(curve.khat) + 1e-300)
-        if apart.any():
-            ax.plot(curve.t, np.where(apart, curve.global_k, np.nan), ":", linewidth=1.0,
-                    color=line.get_color())  # fmt: skip
-    if any((np.abs(c.global_k - c.khat) > 1e-6 * np.abs(c.khat)).any() for c in curves):
-        ax.plot([], [], ":", color="gray", label="global minimum of J")
-    if any(curve.band is not None for curve in curves):
-        ax.fill_between([], [], [], color="gray", alpha=0.15, label="approximate 95 % band")
-        values = np.concatenate([curve.khat for curve in curves] + [[true_value or curve.khat[-1]]])
-        low, high = float(values.min()), float(values.max())
-        pad = 0.1 * (high - low) or 0.1 * abs(high) or 1.0
-        ax.set_ylim(low - pad, high + pad)  # the early band is wide: keep the estimates in view
-    if true_value is not None:
-        ax.axhline(true_value, color="black", linestyle="--", linewidth=0.9,
-                   label=f"true value {unknown} = {true_value:g}")  # fmt: skip
-    ax.set_xlabel("time t (s)")
-    ax.set_ylabel(f"estimate {_hat(unknown)} of {unknown}")
-    ax.set_title(title, fontsize="medium")
-    ax.legend(loc="best", fontsize="small")
+    global minimiser of the cost. Several unknowns: a panel each (the global minimiser is
+    known at the end only: a marker there)."""
+    figure, axes = _figure(heights=(1,) * len(unknowns))
+    truths = np.broadcast_to(np.nan if true_value is None else true_value, (len(unknowns),))
+    for index, (ax, unknown, truth) in enumerate(zip(axes, unknowns, truths, strict=True)):
+        for curve in curves:
+            khat = curve.khat if curve.khat.ndim == 1 else curve.khat[:, index]
+            best = curve.global_k if curve.global_k.ndim == 1 else curve.global_k[:, index]
+            (line,) = ax.plot(curve.t, khat, label=curve.label, linewidth=1.4)
+            if curve.band is not None:
+                ax.fill_between(curve.t, khat - curve.band, khat + curve.band,
+                                color=line.get_color(), alpha=0.15, linewidth=0)  # fmt: skip
+            apart = np.abs(best - khat) > 1e-6 * (np.abs(khat) + 1e-300)
+            if apart.sum() == 1:
+                ax.plot(curve.t[apart], best[apart], "x", color=line.get_color())
+            elif apart.any():
+                ax.plot(curve.t, np.where(apart, best, np.nan), ":", linewidth=1.0,
+                        color=line.get_color())  # fmt: skip
+        if any(_apart(c, index) for c in curves):
+            ax.plot([], [], ":", color="gray", label="global minimum of J")
+        if any(curve.band is not None for curve in curves):
+            ax.fill_between([], [], [], color="gray", alpha=0.15, label="approximate 95 % band")
+            last = truth if np.isfinite(truth) else curves[-1].khat[-1]
+            values = np.concatenate([curve.khat for curve in curves] + [[last]])
+            low, high = float(values.min()), float(values.max())
+            pad = 0.1 * (high - low) or 0.1 * abs(high) or 1.0
+            ax.set_ylim(low - pad, high + pad)  # the early band is wide: keep the estimates in view
+        if np.isfinite(truth):
+            ax.axhline(truth, color="black", linestyle="--", linewidth=0.9,
+                       label=f"true value {unknown} = {truth:g}")  # fmt: skip
+        ax.set_ylabel(f"estimate {_hat(unknown)} of {unknown}")
+        ax.legend(loc="best", fontsize="small")
+    axes[-1].set_xlabel("time t (s)")
+    axes[0].set_title(title, fontsize="medium")
     _save(figure, path, dpi)
+
+
+def _apart(curve: Curve, index: int) -> bool:
+    khat = curve.khat if curve.khat.ndim == 1 else curve.khat[:, index]
+    best = curve.global_k if curve.global_k.ndim == 1 else curve.global_k[:, index]
+    return bool((np.abs(best - khat) > 1e-6 * np.abs(khat)).any())
 
 
 def cost(

@@ -63,6 +63,8 @@ def _shadows(name: str) -> bool:
 
 def _check(theta: Theta) -> None:
     """Reject what the generated module could not carry safely or use meaningfully."""
+    if not (isinstance(theta.model, str) and _is_name(theta.model, dotted=False)):
+        raise _fail(theta, "bad_name", f"the model name {theta.model!r} is not a Python identifier")
     if _shadows(theta.model):
         raise _fail(
             theta,
@@ -70,19 +72,12 @@ def _check(theta: Theta) -> None:
             f"the model name {theta.model!r} is the name of a Python module: the estimator "
             f"module {theta.model}.py would shadow it wherever it is imported; rename the model",
         )
-    if len(theta.unknowns) > 1:
-        raise _fail(
-            theta,
-            "several_unknowns",
-            f"the estimator identifies one unknown, and the model has {len(theta.unknowns)} "
-            f"({', '.join(theta.unknowns)}): choose one with --unknown NAME",
-        )
-    for role, name in (("model name", theta.model), ("unknown", theta.unknown)):
-        if not (isinstance(name, str) and name.isidentifier() and not keyword.iskeyword(name)):
-            raise _fail(theta, "bad_name", f"the {role} {name!r} is not a Python identifier")
+    for name in theta.unknowns:
+        if not _is_name(name):
+            raise _fail(theta, "bad_name", f"the unknown {name!r} is not a parameter name")
     for name in theta.symbols:
-        if not name.isidentifier() or keyword.iskeyword(name):
-            raise _fail(theta, "bad_name", f"the parameter {name!r} is not a Python identifier")
+        if not _is_name(name):
+            raise _fail(theta, "bad_name", f"the parameter {name!r} is not a parameter name")
         if name in RESERVED:
             raise _fail(
                 theta,
@@ -95,9 +90,24 @@ def _check(theta: Theta) -> None:
         raise _fail(
             theta,
             "no_dependence",
-            f"the transfer function does not depend on {theta.unknown}: there is nothing "
-            "to identify",
+            f"the transfer function does not depend on {', '.join(theta.unknowns)}: there is "
+            "nothing to identify",
         )
+    idle = [name for name, degree in theta.degrees.items() if degree == 0]
+    if idle:
+        raise _fail(
+            theta,
+            "no_dependence",
+            f"the transfer function does not depend on {idle[0]}: it cannot be identified; "
+            "make it a known parameter (or choose the unknowns with --unknown)",
+        )
+
+
+def _is_name(name: str, dotted: bool = True) -> bool:
+    """A model-derived name the generated code may carry (as a string, through repr): an
+    identifier that is no keyword, or (`dotted`) a subsystem's dotted path of them."""
+    parts = name.split(".") if dotted else [name]
+    return all(part.isidentifier() and not keyword.iskeyword(part) for part in parts)
 
 
 def _number(value: sympy.Expr) -> str:
@@ -231,11 +241,28 @@ def _context(theta: Theta) -> dict:
         for i, label in enumerate(theta.row_labels)
     ]
     defaults = {name: theta.defaults.get(name) for name in theta.symbols}
-    example_k = (
-        1.0
-        if theta.true_value is None
-        else _float(_in_range(theta, theta.true_value, theta.unknown))
-    )
+    several = len(theta.unknowns) > 1
+    given = {
+        name: _float(_in_range(theta, value, name))
+        for name, value in theta.true_values.items()
+        if value is not None and name in theta.unknowns
+    }
+    examples = [given.get(name, 1.0) for name in theta.unknowns]
+    if several:
+        true_value = ", ".join(
+            f"{name} = {_doc_text(str(theta.true_values[name]))}" for name in given
+        )
+        true_float = repr(tuple(given.get(name) for name in theta.unknowns))
+        example_k, example_k0 = repr(examples), repr([value / 2 for value in examples])
+        example_option = ",".join(
+            f"{name}={value / 2!r}" for name, value in zip(theta.unknowns, examples, strict=True)
+        )
+    else:
+        value = theta.true_value
+        true_value = None if value is None else _doc_text(str(value))
+        true_float = "None" if value is None else repr(examples[0])
+        example_k, example_k0 = repr(examples[0]), repr(examples[0] / 2)
+        example_option = example_k0
     return {
         "version": __version__,
         "model": theta.model,
@@ -245,9 +272,15 @@ def _context(theta: Theta) -> dict:
         "output": theta.output,
         "input_description": theta.input_description,
         "output_description": theta.output_description,
+        "several": several,
         "unknown": theta.unknown,
-        "true_value": None if theta.true_value is None else _doc_text(str(theta.true_value)),
-        "true_value_float": "None" if theta.true_value is None else repr(example_k),
+        "unknowns": tuple(theta.unknowns),
+        "names": ", ".join(theta.unknowns),
+        "degrees": ", ".join(f"{name} {degree}" for name, degree in theta.degrees.items()),
+        "columns": ", ".join(theta.column_labels),
+        "monomials": repr(tuple(tuple(int(e) for e in monomial) for monomial in theta.monomials)),
+        "true_value": true_value or None,
+        "true_value_float": true_float,
         "transfer": f"({theta.num})/({theta.den})",
         "numerator": _wrapped("B(s)", theta.num),
         "denominator": _wrapped("A(s)", theta.den),
@@ -267,8 +300,9 @@ def _context(theta: Theta) -> dict:
         )
         + "}",
         "rows": rows,
-        "example_k": repr(example_k),
-        "example_k0": repr(example_k / 2),
+        "example_k": example_k,
+        "example_k0": example_k0,
+        "example_k0_option": example_option,
     }
 
 
@@ -339,12 +373,17 @@ def load(theta: Theta) -> types.ModuleType:
     The source is the same text `mtt compile` writes (see the module docstring for why
     running it is safe). It is written to a temporary directory and imported from there
     by the standard import machinery, as a user's `import` of a compiled module would be,
-    and registered in sys.modules so that its dataclass can find its own module.
+    and registered in sys.modules so that its dataclass can find its own module. Loading
+    the same source again gives the module already loaded.
     """
     name = f"_mtt_generated_{theta.model}"
+    text = render(theta)
+    loaded = sys.modules.get(name)
+    if loaded is not None and getattr(loaded, "_mtt_source", None) == text:
+        return loaded  # the same module: objects made by it still pickle as its own
     with tempfile.TemporaryDirectory(prefix="mtt-") as directory:
         path = Path(directory) / f"{name}.py"
-        path.write_text(render(theta), encoding="utf-8")
+        path.write_text(text, encoding="utf-8")
         spec = importlib.util.spec_from_file_location(name, path)
         module = importlib.util.module_from_spec(spec)
         sys.modules[name] = module
@@ -353,4 +392,5 @@ def load(theta: Theta) -> types.ModuleType:
         except BaseException:
             del sys.modules[name]
             raise
+    module._mtt_source = text
     return module
