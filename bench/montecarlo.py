@@ -7,7 +7,9 @@ scipy.signal.max_len_seq held between switches, scipy.signal.lsim with a zero-or
 (exact for it), and white Gaussian noise on the output samples at a signal-to-noise ratio
 (signal variance over noise variance). `fit` is told the input was held (hold="zoh"), as
 the experiment was made; everything else is its default (method="iv", C="auto", offset
-and initial state estimated).
+and initial state estimated; several unknowns: the global search within the default box,
+the model file's values within a factor of 10). The DC motor (ra, jl) and the series RLC
+circuit (r, l, c) of issue 11 have a row per unknown.
 
 Times are this process's CPU time with BLAS on one thread (see bench/estimate.py).
 
@@ -45,10 +47,22 @@ def absorber_tf(k: float, tau: float = 2.0, flow: float = 0.5):
     return [k**3], flow * np.polyadd(np.polyadd(first, cube), [k**3])
 
 
+def dc_motor_tf(k):
+    """G(s) = km / ((la s + ra)((jm + jl) s + b) + km^2), la = 1/10, km = jm = 1, b = 1/10."""
+    ra, jl = k
+    return [1.0], np.polyadd(np.polymul([0.1, ra], [1 + jl, 0.1]), [1.0])
+
+
+def rlc3_tf(k):
+    """G(s) = c s / (l c s^2 + r c s + 1): the current of a series RLC circuit."""
+    r, inductance, c = k
+    return [c, 0.0], [inductance * c, r * c, 1.0]
+
+
 @dataclass(frozen=True)
 class Experiment:
     name: str  # the generated module
-    k: float
+    k: float | tuple[float, ...]  # several unknowns: in the module's UNKNOWNS order
     tf: object
     t_end: float
     dt: float
@@ -80,35 +94,40 @@ def prbs(t: np.ndarray, hold: float, seed: int) -> np.ndarray:
 EXPERIMENTS = {
     "dc_drive": Experiment("dc_drive", 10.0, dc_drive_tf, 400.0, 0.02, 1.0),
     "absorber": Experiment("absorber", 0.72, absorber_tf, 40.0, 0.01, 2.0),
+    "dc_motor": Experiment("dc_motor", (1.0, 10.0), dc_motor_tf, 60.0, 0.01, 0.5),
+    "rlc3": Experiment("rlc3", (2.0, 0.5, 0.1), rlc3_tf, 10.0, 0.002, 0.2),
 }
 
 
-def output_error(experiment: Experiment, t, u, y) -> float:
+def output_error(experiment: Experiment, t, u, y) -> np.ndarray:
     """The reference: least squares of y - lsim(G(k)) over k (scipy), from the true value."""
-    k = experiment.k
+    k = np.atleast_1d(experiment.k)
+    several = np.ndim(experiment.k) > 0
 
     def residuals(p):
-        return signal.lsim(experiment.tf(p[0]), u, t, interp=False)[1] - y
+        return signal.lsim(experiment.tf(p if several else p[0]), u, t, interp=False)[1] - y
 
-    return float(optimize.least_squares(residuals, [k], x_scale=[abs(k)]).x[0])
+    return optimize.least_squares(residuals, k, x_scale=np.abs(k)).x
 
 
 def monte_carlo(module, experiment: Experiment, snr_db: float, seeds: int, reference: int):
     rows = {"iv": [], "ls": []}
     times = {"iv": [], "ls": [], "oe": []}
-    oe = []
+    oe = []  # several unknowns: a row each
     for seed in range(seeds):
         t, u, y = experiment.record(seed, snr_db)
         for method in rows:
             start = time.process_time()
             result = module.fit(t, u, y, hold="zoh", method=method)
             times[method].append(time.process_time() - start)
-            rows[method].append((result.k, result.k_se, result.ci[0], result.ci[1]))
+            ci = np.reshape(result.ci, (-1, 2))
+            rows[method].append(np.stack([np.atleast_1d(result.k), np.atleast_1d(result.k_se),
+                                          ci[:, 0], ci[:, 1]]))  # fmt: skip
         if seed < reference:
             start = time.process_time()
             oe.append(output_error(experiment, t, u, y))
             times["oe"].append(time.process_time() - start)
-    return {m: np.array(v) for m, v in rows.items()}, times, np.array(oe)
+    return {m: np.array(v) for m, v in rows.items()}, times, np.reshape(oe, (len(oe), -1))
 
 
 def table(rows: list[list[str]]) -> str:
@@ -121,7 +140,7 @@ def table(rows: list[list[str]]) -> str:
     return "\n".join(lines)
 
 
-def noise_rows(seeds: int, reference: int) -> list[list[str]]:
+def noise_rows(seeds: int, reference: int, names=tuple(EXPERIMENTS)) -> list[list[str]]:
     header = [
         "record",
         "SNR",
@@ -133,31 +152,34 @@ def noise_rows(seeds: int, reference: int) -> list[list[str]]:
         "time per fit",
     ]
     rows = [header]
-    for name, experiment in EXPERIMENTS.items():
+    for name in names:
+        experiment = EXPERIMENTS[name]
         module = generated(name)
+        truths = np.atleast_1d(experiment.k)
+        record = (
+            f"{name} (PRBS {experiment.hold:g} s, {experiment.t_end:g} s, dt {experiment.dt:g})"
+        )
         for snr in (20.0, 10.0):
             results, times, oe = monte_carlo(module, experiment, snr, seeds, reference)
-            label = (
-                f"{name} (PRBS {experiment.hold:g} s, {experiment.t_end:g} s, dt {experiment.dt:g})"
-            )
-            truth = experiment.k
-            for method, r in results.items():
-                k, se, lo, hi = r.T
-                std = k.std(ddof=1)
-                covered = np.mean((lo <= truth) & (truth <= hi))
-                rows.append([
-                    label, f"{snr:g} dB", f"fit, method={method!r}",
-                    f"{100 * (k.mean() / truth - 1):+.3f} %", f"{100 * std / truth:.3f} %",
-                    f"{se.mean() / std:.2f}", f"{100 * covered:.0f} %",
-                    f"{1e3 * np.median(times[method]):.0f} ms",
-                ])  # fmt: skip
-            if oe.size:
-                rows.append([
-                    rows[-1][0], f"{snr:g} dB", f"output-error LS ({oe.size} seeds)",
-                    f"{100 * (oe.mean() / experiment.k - 1):+.3f} %",
-                    f"{100 * oe.std(ddof=1) / experiment.k:.3f} %", "", "",
-                    f"{1e3 * np.median(times['oe']):.0f} ms",
-                ])  # fmt: skip
+            for i, (unknown, truth) in enumerate(zip(module.UNKNOWNS, truths, strict=True)):
+                label = record if truths.size == 1 else f"{record}: {unknown} = {truth:g}"
+                for method, r in results.items():
+                    k, se, lo, hi = r[:, :, i].T
+                    std = k.std(ddof=1)
+                    covered = np.mean((lo <= truth) & (truth <= hi))
+                    rows.append([
+                        label, f"{snr:g} dB", f"fit, method={method!r}",
+                        f"{100 * (k.mean() / truth - 1):+.3f} %", f"{100 * std / truth:.3f} %",
+                        f"{se.mean() / std:.2f}", f"{100 * covered:.0f} %",
+                        f"{1e3 * np.median(times[method]):.0f} ms",
+                    ])  # fmt: skip
+                if oe.size:
+                    rows.append([
+                        label, f"{snr:g} dB", f"output-error LS ({len(oe)} seeds)",
+                        f"{100 * (oe[:, i].mean() / truth - 1):+.3f} %",
+                        f"{100 * oe[:, i].std(ddof=1) / truth:.3f} %", "", "",
+                        f"{1e3 * np.median(times['oe']):.0f} ms",
+                    ])  # fmt: skip
             print(f"  {name} at {snr:g} dB done", file=sys.stderr)
     return rows
 
@@ -174,7 +196,8 @@ def nuisance_rows() -> list[list[str]]:
             "fit, offset=False, initial_state=False",
         ]
     ]
-    for name, experiment in EXPERIMENTS.items():
+    for name in ("dc_drive", "absorber"):
+        experiment = EXPERIMENTS[name]
         module = generated(name)
         t = experiment.times()
         u = prbs(t, experiment.hold, 3)
@@ -241,10 +264,15 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--seeds", type=int, default=100)
     parser.add_argument("--reference", type=int, default=20, help="seeds for output-error LS")
+    parser.add_argument("--models", default=",".join(EXPERIMENTS),
+                        help=f"the records' models (default {','.join(EXPERIMENTS)})")  # fmt: skip
+    parser.add_argument("--noise-only", action="store_true", help="the noise table alone")
     args = parser.parse_args()
     warnings.simplefilter("ignore")
     print(f"Monte Carlo, {args.seeds} seeds per row:\n")
-    print(table(noise_rows(args.seeds, args.reference)))
+    print(table(noise_rows(args.seeds, args.reference, tuple(args.models.split(",")))))
+    if args.noise_only:
+        return
     print("\nOffset and initial state, noise-free:\n")
     print(table(nuisance_rows()))
     print("\nSpeed:\n")

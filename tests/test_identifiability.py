@@ -270,6 +270,19 @@ def test_compile_warns_about_an_unknown_that_is_only_locally_identifiable(capsys
     assert (status, err) == (EXIT_OK, "")
 
 
+def test_a_coefficient_not_rational_in_a_kept_parameter_is_a_message(capsys, tmp_path):
+    """2^z with z kept symbolic (no value): identifiability cannot decide, and says so; compile
+    refuses with its own message (both were internal errors, found by tests/test_fuzz.py)."""
+    model = tmp_path / "powered.bg"
+    model.write_text("model powered\nunknown k = 3\nparam z\nSe:u -> 1:a\n1:a -> R:k\n"
+                     "1:a -> I:m(2 ^ z)\n1:a -> Df:y\n")  # fmt: skip
+    status, _, err = run(capsys, "identifiability", model)
+    assert status == EXIT_MODEL_ERROR and "error[unsupported_theta]: a coefficient" in err
+    assert "2**z, is not a rational function" in err
+    status, _, err = run(capsys, "compile", model, "-o", tmp_path)
+    assert status == EXIT_MODEL_ERROR and "error[unsupported_theta]: the Theta entry 2**z" in err
+
+
 def test_the_commands_in_the_docs_print_what_the_docs_show(capsys, monkeypatch):
     """Each `$ mtt ...` in docs/identifiability.md, run here: standard error (the
     warnings come first), then standard output."""

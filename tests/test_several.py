@@ -12,6 +12,7 @@ from __future__ import annotations
 import math
 import pickle
 import warnings
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -252,3 +253,22 @@ def test_batch_fits_carry_a_vector_per_record_and_pool_through_fit_records(dc_mo
     assert main(["fit", "models/dc_motor.bg", "--data", pattern, "--hold", "zoh", "--json"]) == 0
     found = json.loads(capsys.readouterr().out)["records"]
     assert [r["k"] for r in found] == [list(outcome.result.k) for outcome in batch]
+
+
+def test_a_locally_identifiable_model_has_both_minima_and_a_warning():
+    """The RC ladder with both resistances unknown: (r1, r2) and (r2/2, 2 r1) give the same
+    transfer function (mtt identifiability: local, 2 solutions). The search finds both
+    minima of the criterion, and the fit says the data cannot tell them apart."""
+    import mtt
+
+    ladder = mtt.load(Path(__file__).parent / "data" / "identifiability" / "ladder.bg")
+    module = ladder.estimator()
+    t = np.linspace(0.0, 30.0, 3001)
+    u = module.input_signal("prbs", t, period=0.5)
+    y = module.simulate(t, u, [1.0, 3.0], hold="zoh")
+    with pytest.warns(
+        module.EstimationWarning, match=r"another local minimum, r1 = 1\.[45]\d*, r2 = [12]\."
+    ):
+        result = module.fit(t, u, y, hold="zoh")
+    found = result.minima[np.argsort(result.minima[:, 0])]
+    np.testing.assert_allclose(found, [[1.0, 3.0], [1.5, 2.0]], rtol=1e-3)

@@ -72,8 +72,7 @@ def load(
     with a line break). Raise `MttError` for anything wrong in it.
 
     unknowns: the parameters to identify, instead of those the model declares `unknown`
-        (names, or "a,b"); the transfer function and Theta take several, the generated
-        estimator one.
+        (names, or "a,b"); with several, the estimator's k is a vector in that order.
     input, output: the source and the detector (TYPE:NAME), over the model's `input` and
         `output` statements.
     set: values replacing the file's, {name: number or exact expression text}.
@@ -286,7 +285,7 @@ class Model:
         return self._estimator
 
     def simulate(self, t, u, k: object = None, **options):
-        """The generated module's `simulate(t, u, k, ...)`; k defaults to the file's value."""
+        """The generated module's `simulate(t, u, k, ...)`; k defaults to the file's value(s)."""
         module = self._estimator
         k = module.TRUE_VALUE if k is None else k
         if k is None:

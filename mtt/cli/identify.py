@@ -156,7 +156,10 @@ def warnings(graph: BondGraph, choice: ParameterChoice) -> list[Diagnostic]:
     except MttError:
         return []
     positions = {name: p.position for name, p in graph.parameters.items()}
-    found = warning_for(identifiability(theta), positions)
+    try:
+        found = warning_for(identifiability(theta), positions)
+    except MttError:  # undecidable here (mtt identifiability says why)
+        return []
     if found is None:
         return []
     return [found if found.origin else replace(found, origin=Origin(graph.source))]

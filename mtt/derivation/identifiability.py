@@ -32,7 +32,7 @@ from sympy.polys.matrices import DomainMatrix
 
 from mtt.derivation import fields
 from mtt.derivation.theta import Theta
-from mtt.language.diagnostics import Diagnostic, warning
+from mtt.language.diagnostics import Diagnostic, MttError, warning
 
 Point = dict[str, sympy.Expr]  # a value per unknown
 
@@ -95,7 +95,16 @@ def _rank(system: fields.System) -> int:
     if not rows:
         return 0
     field = QQ.frac_field(*system.xs, *system.symbols)
-    entries = [[field.from_sympy(e) for e in row] for row in rows]
+    try:
+        entries = [[field.from_sympy(e) for e in row] for row in rows]
+    except (ValueError, sympy.polys.polyerrors.CoercionFailed):
+        bad = next(c for c in system.coefficients if not c.is_rational_function(*field.symbols))
+        raise MttError(
+            f"a coefficient of the transfer function, {sympy.sstr(bad)[:60]}, is not a rational "
+            "function of the unknowns and the parameters kept symbolic: give those parameters "
+            "values (--set NAME=VALUE) to decide identifiability",
+            kind="unsupported_theta",
+        ) from None
     return DomainMatrix(entries, (len(rows), len(rows[0])), field).rank() - 1
 
 
