@@ -271,8 +271,8 @@ def test_compile_warns_about_an_unknown_that_is_only_locally_identifiable(capsys
 
 
 def test_a_coefficient_not_rational_in_a_kept_parameter_is_a_message(capsys, tmp_path):
-    """2^z with z kept symbolic (no value): identifiability cannot decide, and says so; compile
-    refuses with its own message (both were internal errors, found by tests/test_fuzz.py)."""
+    """2^z with z kept symbolic (no value), or sqrt(5): identifiability cannot decide, and says
+    so (both were internal errors of compile, found by tests/test_fuzz.py)."""
     model = tmp_path / "powered.bg"
     model.write_text("model powered\nunknown k = 3\nparam z\nSe:u -> 1:a\n1:a -> R:k\n"
                      "1:a -> I:m(2 ^ z)\n1:a -> Df:y\n")  # fmt: skip
@@ -281,6 +281,13 @@ def test_a_coefficient_not_rational_in_a_kept_parameter_is_a_message(capsys, tmp
     assert "2**z, is not a rational function" in err
     status, _, err = run(capsys, "compile", model, "-o", tmp_path)
     assert status == EXIT_MODEL_ERROR and "error[unsupported_theta]: the Theta entry 2**z" in err
+    surd = tmp_path / "surd.bg"  # an irrational constant: the algebra is over Q
+    surd.write_text("model surd\nunknown k = 3\nSe:u -> 1:a\n1:a -> R:k\n1:a -> I:m(sqrt(5))\n"
+                    "1:a -> Df:y\n")  # fmt: skip
+    status, _, err = run(capsys, "identifiability", surd)
+    assert status == EXIT_MODEL_ERROR and "hold an irrational constant (such as sqrt(5))" in err
+    status, _, err = run(capsys, "compile", surd, "-o", tmp_path)
+    assert status == EXIT_OK and err == ""  # compile goes on, without the warning
 
 
 def test_the_commands_in_the_docs_print_what_the_docs_show(capsys, monkeypatch):

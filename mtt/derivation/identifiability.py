@@ -68,6 +68,15 @@ class Identifiability:
 
 def identifiability(theta: Theta) -> Identifiability:
     """The structural identifiability of Theta's unknowns (see the module docstring)."""
+    names = sympy.symbols([*theta.unknowns, *theta.symbols])
+    for entry in theta.matrix:
+        if not entry.is_rational_function(*names):
+            raise MttError(
+                f"a coefficient of the transfer function, {sympy.sstr(entry)[:60]}, is not a "
+                "rational function of the unknowns and the parameters kept symbolic: give those "
+                "parameters values (--set NAME=VALUE) to decide identifiability",
+                kind="unsupported_theta",
+            )
     system = fields.System.of(theta)
     unknowns = theta.unknowns
     rank = _rank(system)
@@ -97,12 +106,11 @@ def _rank(system: fields.System) -> int:
     field = QQ.frac_field(*system.xs, *system.symbols)
     try:
         entries = [[field.from_sympy(e) for e in row] for row in rows]
-    except (ValueError, sympy.polys.polyerrors.CoercionFailed):
-        bad = next(c for c in system.coefficients if not c.is_rational_function(*field.symbols))
+    except ValueError:  # an irrational constant (sqrt(5)): the algebra here is over Q
         raise MttError(
-            f"a coefficient of the transfer function, {sympy.sstr(bad)[:60]}, is not a rational "
-            "function of the unknowns and the parameters kept symbolic: give those parameters "
-            "values (--set NAME=VALUE) to decide identifiability",
+            "the transfer function's coefficients hold an irrational constant (such as "
+            "sqrt(5)), and identifiability is decided over the rational numbers: give the "
+            "constant as a decimal to decide it",
             kind="unsupported_theta",
         ) from None
     return DomainMatrix(entries, (len(rows), len(rows[0])), field).rank() - 1
