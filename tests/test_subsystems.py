@@ -135,6 +135,17 @@ def test_a_bond_may_join_two_subsystems_ports_and_ports_may_chain(tmp_path):
     assert equal(transfer_for(model).denominator, 2)
 
 
+def test_a_signal_reads_a_subsystems_junction_by_its_dotted_name(tmp_path):
+    # tank: u = (s + 1) x; the parent's modulated flow g x fills a unit capacitor: y = g x / s
+    model = write(tmp_path, {
+        "top.bg": 'model top\nunknown g = 2\nsubsystem tank = "tank.bg"\nSf:u -> tank.in\n'
+                  "MSf:m(g*e(tank.x)) -> 0:b\n0:b -> C:cb(1)\n0:b -> De:y\n",
+        "tank.bg": "model tank\nSS:in -> 0:x\n0:x -> C:h(1)\n0:x -> R:out(1)\n",
+    })  # fmt: skip
+    tf = transfer_for(model)
+    assert equal(tf.numerator * (s**2 + s) - tf.denominator * sympy.Symbol("g"), 0)
+
+
 def test_show_draws_the_subsystem_tree(capsys):
     assert main(["show", str(HERE / "plant.bg")]) == 0
     out = capsys.readouterr().out.splitlines()
