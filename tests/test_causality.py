@@ -386,3 +386,20 @@ def test_the_deriving_commands_report_what_they_cannot_do(capsys):
     record = json.loads(capsys.readouterr().out)
     assert [(e["kind"], e["line"]) for e in record["errors"]] == [("no_dependence", 6)]
     assert (record["input"], record["output"]) == ("Se:v", "De:y")
+
+
+def test_an_unknown_that_cancels_exactly_is_refused_by_theta(tmp_path, capsys):
+    from mtt.cli.main import main
+
+    # k reaches the output structurally, but R:a(k + 2) in series with R:b(-k) sum to 2
+    path = tmp_path / "cancel.bg"
+    path.write_text("model cancel\nunknown k = 1\nSe:v -> 1:j\n1:j -> R:a(k + 2)\n"
+                    "1:j -> R:b(-k)\n1:j -> C:c(1)\n1:j -> Df:i\n")  # fmt: skip
+    assert main(["tf", str(path)]) == 0
+    assert "  G(s) = s / (2*s + 1)" in capsys.readouterr().out
+    assert main(["theta", "--json", str(path)]) == 2
+    record = json.loads(capsys.readouterr().out)
+    assert [(e["kind"], e["line"], e["column"]) for e in record["errors"]] == [
+        ("no_dependence", 2, 9)
+    ]
+    assert "cancels out of the exact transfer function" in record["errors"][0]["message"]
