@@ -82,6 +82,7 @@ import argparse
 import csv
 import json
 import math
+import os
 import re
 import sys
 import warnings
@@ -3523,10 +3524,12 @@ def main(argv: list[str] | None = None) -> int:
     for warning in caught:
         if issubclass(warning.category, EstimationWarning):
             print(f"{prog}: warning: {warning.message}", file=sys.stderr)
-    if args.json:
-        print(json.dumps(dict(model=MODEL, unknown=UNKNOWN, **record)))
-    else:
-        print("\n".join(lines))
+    try:
+        print(json.dumps(dict(model=MODEL, unknown=UNKNOWN, **record)) if args.json
+              else "\n".join(lines))  # fmt: skip
+        sys.stdout.flush()
+    except BrokenPipeError:  # `... | head`: the reader had enough; Python's flush at exit
+        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())  # would fail again
     return status
 
 

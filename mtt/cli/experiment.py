@@ -183,6 +183,8 @@ def guarded(action: Callable[[argparse.Namespace], int]) -> Callable[[argparse.N
             return status
         except (UsageError, ValueError) as exc:
             message = str(exc)
+        except BrokenPipeError:  # stdout closed by its reader: main's business, not an error
+            raise
         except OSError as exc:
             message = f"{exc.filename}: {exc.strerror}" if exc.filename else str(exc)
         print(f"mtt {args.command}: error: {message}", file=sys.stderr)

@@ -379,7 +379,9 @@ def make_parser() -> argparse.ArgumentParser:
 def main(argv: list[str] | None = None) -> int:
     args = make_parser().parse_args(argv)
     try:
-        return args.run(args)
+        status = args.run(args)
+        sys.stdout.flush()  # a closed pipe shows here, inside the handlers below
+        return status
     except MttError as exc:  # a ModelError renders every problem in the model
         print(exc.render(), file=sys.stderr)
         if getattr(args, "json", False) and args.command != "check":  # check has its records
@@ -388,7 +390,9 @@ def main(argv: list[str] | None = None) -> int:
     except KeyboardInterrupt:
         print("mtt: interrupted", file=sys.stderr)
         return 130
-    except BrokenPipeError:
+    except BrokenPipeError:  # `mtt tf ... | head`: the reader had enough
+        # what is still buffered would fail again when Python flushes at exit
+        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
         return EXIT_OK
     except Exception as exc:  # noqa: BLE001 - the last line of defence: never a raw traceback
         if os.environ.get("MTT_DEBUG"):
