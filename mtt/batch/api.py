@@ -140,8 +140,8 @@ def estimator(model) -> Estimator:
             kind="bad_argument",
         )
     name = worker.module_name(source)
-    sys.modules.setdefault(name, module)  # results pickled by workers come back as its classes
-    return Estimator(sys.modules[name], source, name)
+    sys.modules[name] = module  # results pickled by workers come back as its classes
+    return Estimator(module, source, name)
 
 
 # the records ----------------------------------------------------------------------------
