@@ -173,6 +173,13 @@ def test_models_and_bad_arguments(dc_drive, logs):
     with pytest.raises(mtt.MttError, match="executor must be"):
         fit_many(dc_drive, paths, executor=object())
     assert len(fit_many(dc_drive, [logs / "missing.csv"], jobs=1).errors) == 1
+    # estimate_many: a missing k0 or an unknown option is one error, not one per record
+    with pytest.raises(mtt.MttError, match="estimate: missing a required argument: 'k0'"):
+        estimate_many(dc_drive, paths, jobs=1)
+    with pytest.raises(mtt.MttError, match="estimate: unexpected parameter 'bta'"):
+        estimate_many(dc_drive, paths, jobs=1, k0=5.0, bta=0.1)
+    with pytest.raises(mtt.MttError, match="the recursive estimate follows one record"):
+        estimate_many(dc_drive, paths, jobs=1, k0=5.0, pooled=True)
 
 
 def test_a_module_imported_again_and_models_of_one_name(dc_drive):
