@@ -173,3 +173,34 @@ def test_models_and_bad_arguments(dc_drive, logs):
     with pytest.raises(mtt.MttError, match="executor must be"):
         fit_many(dc_drive, paths, executor=object())
     assert len(fit_many(dc_drive, [logs / "missing.csv"], jobs=1).errors) == 1
+    # estimate_many: a missing k0 or an unknown option is one error, not one per record
+    with pytest.raises(mtt.MttError, match="estimate: missing a required argument: 'k0'"):
+        estimate_many(dc_drive, paths, jobs=1)
+    with pytest.raises(mtt.MttError, match="estimate: unexpected parameter 'bta'"):
+        estimate_many(dc_drive, paths, jobs=1, k0=5.0, bta=0.1)
+    with pytest.raises(mtt.MttError, match="the recursive estimate follows one record"):
+        estimate_many(dc_drive, paths, jobs=1, k0=5.0, pooled=True)
+
+
+def test_a_module_imported_again_and_models_of_one_name(dc_drive):
+    """A module imported again under its name (a notebook cell run twice; the test modules'
+    fixtures), or a model of the same name loaded with other values, replaces the module its
+    first batch registered: the next batches in a process pool still pickle their results
+    (they raised PicklingError) and give the current module's classes."""
+    from estimators import load
+
+    data = [simulated(dc_drive, seed, samples=401) for seed in range(2)]
+    first = fit_many(dc_drive, data, jobs=2, chunk_size=1, hold="zoh")
+    again = load("dc_drive")  # generated_dc_drive is now another module object
+    second = fit_many(again, data, jobs=2, chunk_size=1, hold="zoh")
+    assert all(type(o.result) is again.Fit for o in second)
+    assert [o.result.k for o in second] == [o.result.k for o in first]
+    a = mtt.load("models/dc_drive.bg")
+    b = mtt.load("models/dc_drive.bg", set={"ra": 2})
+    before = fit_many(a, data, jobs=2, chunk_size=1, hold="zoh")
+    assert [o.result.k for o in before] == [o.result.k for o in first]
+    other = fit_many(b, data, jobs=2, chunk_size=1, hold="zoh")  # the name's module replaced
+    assert all(o.ok for o in other) and abs(other[0].result.k - first[0].result.k) > 1
+    after = fit_many(a, data, jobs=2, chunk_size=1, hold="zoh")
+    assert all(type(o.result) is a.estimator().Fit for o in after)
+    assert [o.result.k for o in after] == [o.result.k for o in first]

@@ -76,13 +76,14 @@ def test_a_pattern_fits_each_record(capsys, logs, dc_drive, tmp_path):
 def test_pooled_by_workers_equals_the_pooled_fit_here(capsys, logs):
     files = [str(logs / f"run_{i:02d}.csv") for i in (0, 1, 2)]
     data = [option for path in files for option in ("--data", path)]
-    here, processes, per_record, bad = run_here(capsys, [
+    bad_data = ["--data", str(logs / "run_0[6-8].csv"), "--pooled", "--hold", "zoh", "--json"]
+    here, processes, per_record, bad, bad_here = run_here(capsys, [
         ["fit", MODEL, *data, "--hold", "zoh", "--json"],
         ["fit", MODEL, "--data", str(logs / "run_0[0-2].csv"), "--pooled", "--jobs", "2",
          "--hold", "zoh", "--json"],
         ["fit", MODEL, *data, "--per-record", "--hold", "zoh", "--json"],
-        ["fit", MODEL, "--data", str(logs / "run_0[6-8].csv"), "--pooled", "--jobs", "2",
-         "--hold", "zoh"],
+        ["fit", MODEL, *bad_data, "--jobs", "2"],
+        ["fit", MODEL, *bad_data],
     ])  # fmt: skip
     assert here.returncode == processes.returncode == per_record.returncode == 0
     pooled, alone = json.loads(here.stdout), json.loads(processes.stdout)
@@ -90,8 +91,11 @@ def test_pooled_by_workers_equals_the_pooled_fit_here(capsys, logs):
         assert abs(alone[name] - pooled[name]) <= 1e-9 * abs(pooled[name])
     assert alone["data"] == files and alone["ok"] and alone["iterations"] == pooled["iterations"]
     assert [record["file"] for record in json.loads(per_record.stdout)["records"]] == files
-    assert bad.returncode == 2  # as in one process, a bad record in a pooled fit is an error
-    assert f"mtt fit: error: {logs / CORRUPT}:18:" in bad.stderr
+    # as in one process, a bad record in a pooled fit is the error, named (also in --json)
+    assert bad.returncode == bad_here.returncode == 2
+    message = f"mtt fit: error: {logs / CORRUPT}:18: column 'y' holds 'oops', not a number\n"
+    assert bad.stderr == bad_here.stderr == message
+    assert bad.stdout == bad_here.stdout and json.loads(bad.stdout)["ok"] is False
 
 
 def test_usage_errors(capsys, logs):

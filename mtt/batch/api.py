@@ -11,6 +11,7 @@ small matrices, and the steps themselves are the module's, not repeated here.
 from __future__ import annotations
 
 import glob
+import inspect
 import math
 import sys
 from collections.abc import Callable, Iterator, Mapping
@@ -140,8 +141,8 @@ def estimator(model) -> Estimator:
             kind="bad_argument",
         )
     name = worker.module_name(source)
-    sys.modules.setdefault(name, module)  # results pickled by workers come back as its classes
-    return Estimator(sys.modules[name], source, name)
+    sys.modules[name] = module  # results pickled by workers come back as its classes
+    return Estimator(module, source, name)
 
 
 # the records ----------------------------------------------------------------------------
@@ -287,15 +288,29 @@ def fit_many(model, records, *, executor=None, jobs: int | None = None, pooled: 
 
 
 def estimate_many(model, records, *, executor=None, jobs: int | None = None,
-                  columns=("t", "u", "y"), chunk_size: int | None = None,
+                  pooled: bool = False, columns=("t", "u", "y"), chunk_size: int | None = None,
                   progress: Progress | None = None, trajectories: bool = False,
                   **estimate_options) -> Batch:  # fmt: skip
     """The generated module's recursive `estimate` (the paper's tracker) on each record, as
-    `fit_many` runs `fit` (estimate_options: k0 and the others of `estimate`). Each
-    Estimate is kept at its last sample (k, global_k, minima and the cost there), unless
-    trajectories=True brings back k^(t) at every sample."""
-    return _each(estimator(model), records, "estimate", executor, jobs, columns, chunk_size,
-                 progress, {**estimate_options, "trajectories": bool(trajectories)})  # fmt: skip
+    `fit_many` runs `fit` (estimate_options: k0 and the others of `estimate`, their names
+    checked once here, their values by each record's estimate). Each Estimate is kept at
+    its last sample (k, global_k, minima and the cost there), unless trajectories=True
+    brings back k^(t) at every sample. pooled=True is an error: the recursive estimate
+    follows one record in time; fit_many(..., pooled=True) pools records."""
+    found = estimator(model)
+    if pooled:
+        raise MttError("the recursive estimate follows one record in time: pool records with "
+                       "fit_many(..., pooled=True)", kind="bad_argument")  # fmt: skip
+    signature = inspect.signature(found.module.estimate)
+    named = {name for name, p in signature.parameters.items() if p.kind is p.KEYWORD_ONLY}
+    try:  # a missing k0 or a misspelt option: one error, not one per record
+        signature.bind(None, None, None, **estimate_options)
+        found.module._known_values({name: value for name, value in estimate_options.items()
+                                    if name not in named})  # fmt: skip
+    except (TypeError, ValueError) as error:
+        raise MttError(f"estimate: {error}", kind="bad_argument") from None
+    return _each(found, records, "estimate", executor, jobs, columns, chunk_size, progress,
+                 {**estimate_options, "trajectories": bool(trajectories)})  # fmt: skip
 
 
 class _OptionsChecked(Exception):

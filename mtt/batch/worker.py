@@ -38,9 +38,14 @@ def same(value):
 
 
 def module_for(name: str, source: str) -> types.ModuleType:
-    """The generated module of this source, imported once per process (sys.modules keeps it)."""
+    """The generated module of this source, imported once per process (sys.modules keeps it).
+
+    The caller may have registered its own copy under `name` (api.estimator), and a forked
+    worker inherits it: it is used while its classes still pickle, that is while it is the
+    module of its own name. A copy imported again since (a notebook cell run twice, models
+    of one name with other values) is replaced by the source run under `name`."""
     module = sys.modules.get(name)
-    if module is None:
+    if module is None or not _pickles(module):
         module = types.ModuleType(name)
         module.__file__ = f"<{name}>"
         linecache.cache[module.__file__] = (len(source), None, source.splitlines(True), "")
@@ -51,6 +56,11 @@ def module_for(name: str, source: str) -> types.ModuleType:
             del sys.modules[name]
             raise
     return module
+
+
+def _pickles(module: types.ModuleType) -> bool:
+    """Whether objects of this module's classes pickle: it is the module of its own name."""
+    return sys.modules.get(module.__name__) is module
 
 
 def one_thread():

@@ -104,12 +104,11 @@ def cmd_fit_many(args, kind: str) -> int:
     finally:
         if client is not None:
             client.close()
-    for outcome in batch.errors:  # one line each, naming the record
-        named = outcome.error.startswith(outcome.name)
-        print(f"mtt fit: error: {'' if named else outcome.name + ': '}{outcome.error}",
-              file=sys.stderr)  # fmt: skip
+    errors = [_named(outcome) for outcome in batch.errors]
     if kind == "pooled":
-        return _pooled(module, args, batch)
+        return _pooled(module, args, batch, errors)
+    for error in errors:  # one line each, naming the record
+        print(f"mtt fit: error: {error}", file=sys.stderr)
     _warnings(batch)
     if args.csv:
         codegen.write_atomic(args.csv, _table_csv(module, batch))
@@ -156,12 +155,23 @@ def _warnings(batch) -> None:
         warn("fit", [f"{len(lines) - SHOWN_WARNINGS} more warnings (--json or --csv lists them)"])
 
 
-def _pooled(module, args, batch) -> int:
+def _named(outcome) -> str:
+    """A record's error message, starting with its name."""
+    named = outcome.error.startswith(outcome.name)
+    return outcome.error if named else f"{outcome.name}: {outcome.error}"
+
+
+def _pooled(module, args, batch, errors: list[str]) -> int:
     from mtt.cli.experiment import EXIT_OK, EXIT_STOPPED, UsageError, warn
     from mtt.cli.fitting import _text
 
-    if batch.errors or batch.pooled is None:  # as in this process: a bad record is an error
-        raise UsageError(f"{len(batch.errors)} of {len(batch)} records could not be fitted")
+    if errors:  # as in this process: a bad record is the error (named, also in --json)
+        for error in errors[1:]:
+            print(f"mtt fit: error: {error}", file=sys.stderr)
+        more = f" ({len(errors)} of {len(batch)} records could not be read)"
+        raise UsageError(errors[0] + (more if len(errors) > 1 else ""))
+    if batch.pooled is None:
+        raise UsageError("no records to fit")
     result = batch.pooled
     warn("fit", result.warnings)
     notes = [f"{outcome.name}" for outcome in batch]
