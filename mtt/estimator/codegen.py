@@ -34,11 +34,16 @@ from mtt.language.diagnostics import ModelError, Source, error
 from mtt.resources import resource_dir
 
 # Keyword names of the generated functions: a kept parameter, passed as a keyword
-# argument (`estimate(..., tau=2)`), must not take one of them.
+# argument (`estimate(..., tau=2)`), must not take one of them (tests/test_codegen.py
+# holds that this covers every function and method of a module that takes **known).
 RESERVED = frozenset(
     {"t", "u", "y", "k", "k0", "beta", "S0", "C", "hold", "method", "rtol", "atol"}
     | {"max_step", "progress", "engine", "bounds", "self", "known", "offset", "initial_state"}
+    | {"records", "keep", "fraction"}  # fit_records, prior_weight
 )
+# Run by the interpreter at start-up wherever they are on its path (as are a package's
+# __init__ and __main__: every __dunder__ name is refused too).
+SPECIAL_MODULES = frozenset({"sitecustomize", "usercustomize"})
 # Characters that sympy's printing of an exact number may use; text made only of them
 # cannot end a docstring or a string literal.
 _PLAIN = re.compile(r"[\w .*/+\-()]+")
@@ -50,9 +55,11 @@ def _fail(theta: Theta, kind: str, message: str) -> ModelError:
 
 def _shadows(name: str) -> bool:
     """Whether an estimator module of this name would shadow a module for code run beside
-    it: one of the standard library's, or one installed (numpy, scipy, ...). The current
+    it: one of the standard library's, or one installed (numpy, scipy, ...), or a name
+    Python gives a meaning wherever it is (__init__, __main__, sitecustomize). The current
     directory is not looked in: an estimator written there before is no module to keep."""
-    if name in sys.stdlib_module_names or name in sys.builtin_module_names:
+    special = name in SPECIAL_MODULES or (name.startswith("__") and name.endswith("__"))
+    if special or name in sys.stdlib_module_names or name in sys.builtin_module_names:
         return True
     here = {"", os.getcwd()}
     return (
@@ -325,6 +332,13 @@ def output_path(given: str | None, theta: Theta) -> Path:
     path = Path(given)
     if path.is_dir() or given.endswith(("/", os.sep)):
         return path / default_path(theta).name
+    if path.suffix == ".py" and path.stem != theta.model and _shadows(path.stem):
+        raise _fail(
+            theta,
+            "reserved_name",
+            f"-o {given}: {path.stem} is the name of a Python module: the estimator module "
+            f"{path.name} would shadow it wherever it is imported; choose another file name",
+        )
     return path
 
 
