@@ -142,6 +142,30 @@ def test_parameter_names_cannot_collide_with_the_modules_own_names():
     assert module.theta(np=1.0)[3, 0] == 2.0
 
 
+def test_the_module_is_imported_without_writing_a_file(monkeypatch, tmp_path):
+    import linecache
+    import tempfile
+    import warnings
+
+    monkeypatch.setattr(tempfile, "tempdir", str(tmp_path / "missing"))  # no temporary files
+    monkeypatch.chdir(tmp_path)
+    module = codegen.load(dc_drive_theta(model="drive_in_memory"))
+    assert sys.modules["_mtt_generated_drive_in_memory"] is module
+    assert module is codegen.load(dc_drive_theta(model="drive_in_memory"))
+    assert list(tmp_path.iterdir()) == []
+    # its lines are there for tracebacks, warnings and inspect, under a name that is no file
+    assert module.__file__ == "<_mtt_generated_drive_in_memory>"
+    assert inspect.getsource(module.fit).startswith("def fit(t, u, y, *")
+    t = np.linspace(0.0, 10.0, 201)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        module.fit(t, np.ones_like(t), module.simulate(t, np.ones_like(t), 10.0))
+    warning = next(w for w in caught if w.category is module.EstimationWarning)
+    assert warning.filename == module.__file__
+    line = linecache.getline(warning.filename, warning.lineno)
+    assert line.strip() and line == module._mtt_source.splitlines(True)[warning.lineno - 1]
+
+
 def test_kept_parameters_without_a_value_must_be_given():
     module = codegen.load(absorber_theta(defaults={"tau": None, "l": sympy.Rational(1, 2)}))
     assert module.DEFAULTS == {"tau": None, "l": 0.5}

@@ -12,8 +12,8 @@ from __future__ import annotations
 
 import errno
 import importlib.machinery
-import importlib.util
 import keyword
+import linecache
 import math
 import os
 import re
@@ -382,29 +382,28 @@ def write_atomic(path: str | Path, data: str | bytes) -> None:
 
 
 def load(theta: Theta) -> types.ModuleType:
-    """The generated module for `theta`, imported: what `mtt simulate/estimate` run.
+    """The generated module for `theta`, imported without writing a file: what `mtt
+    simulate/estimate` and `Model.estimator()` run.
 
     The source is the same text `mtt compile` writes (see the module docstring for why
-    running it is safe). It is written to a temporary directory and imported from there
-    by the standard import machinery, as a user's `import` of a compiled module would be,
-    and registered in sys.modules so that its dataclass can find its own module. Loading
-    the same source again gives the module already loaded.
+    running it is safe), run as the module `_mtt_generated_MODEL`, registered in
+    sys.modules so that its dataclasses find their own module, and in linecache under
+    the name `<_mtt_generated_MODEL>` so that tracebacks, warnings and inspect show its
+    lines. Loading the same source again gives the module already loaded.
     """
     name = f"_mtt_generated_{theta.model}"
     text = render(theta)
     loaded = sys.modules.get(name)
     if loaded is not None and getattr(loaded, "_mtt_source", None) == text:
         return loaded  # the same module: objects made by it still pickle as its own
-    with tempfile.TemporaryDirectory(prefix="mtt-") as directory:
-        path = Path(directory) / f"{name}.py"
-        path.write_text(text, encoding="utf-8")
-        spec = importlib.util.spec_from_file_location(name, path)
-        module = importlib.util.module_from_spec(spec)
-        sys.modules[name] = module
-        try:
-            spec.loader.exec_module(module)
-        except BaseException:
-            del sys.modules[name]
-            raise
+    module = types.ModuleType(name)
+    module.__file__ = f"<{name}>"  # no file: the text is in linecache
+    linecache.cache[module.__file__] = (len(text), None, text.splitlines(True), module.__file__)
+    sys.modules[name] = module
+    try:
+        exec(compile(text, module.__file__, "exec"), module.__dict__)
+    except BaseException:
+        del sys.modules[name]
+        raise
     module._mtt_source = text
     return module
