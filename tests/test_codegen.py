@@ -338,3 +338,28 @@ def test_write_atomic_replaces_whole_files_or_nothing(tmp_path, monkeypatch):
         codegen.write_atomic(target, "partial")
     assert target.read_text() == "new\n"
     assert [path.name for path in tmp_path.iterdir()] == ["module.py"]
+
+
+def test_model_unknown_and_parameter_names_of_the_modules_own_names_work(tmp_path):
+    """A model named like a module-level name of its estimator, with its unknown and a
+    kept parameter named like others (n, m, N are the module's degrees): all still work."""
+    import mtt
+
+    text = (
+        "model theta\nparam N = 2\nparam m = 0.5\nunknown n = 0.1\n"
+        "Se:v -> 1:loop\n1:loop -> R:N\n1:loop -> I:m\n1:loop -> C:n\n1:loop -> Df:i\n"
+    )
+    model = mtt.load(text, keep="m")
+    path = model.compile(tmp_path)
+    assert path.name == "theta.py"
+    program = (
+        "import numpy as np, theta\n"
+        "t = np.linspace(0.0, 10.0, 501); u = np.ones_like(t)\n"
+        "y = theta.simulate(t, u, 0.1, m=0.25)\n"
+        "fit = theta.fit(t, u, y, offset=False, initial_state=False, m=0.25)\n"
+        "print(theta.n, theta.m, theta.N, theta.UNKNOWN, theta.PARAMETERS, round(fit.k, 4))\n"
+    )
+    done = subprocess.run(
+        [sys.executable, "-c", program], cwd=tmp_path, capture_output=True, text=True, check=True
+    )
+    assert done.stdout.split() == ["2", "1", "1", "n", "('m',)", "0.1"]
