@@ -3516,9 +3516,11 @@ def main(argv: list[str] | None = None) -> int:
         text = error
         if isinstance(error, OSError) and error.filename:
             text = f"{error.filename}: {error.strerror}"
-        if args.json:
+        if args.json:  # the record of `mtt fit/estimate --json` when they fail
+            record = dict(file=None, kind="usage", line=None, column=None, message=str(text),
+                          notes=[])  # fmt: skip
             print(json.dumps(dict(ok=False, model=MODEL, unknown=UNKNOWN, unknowns=list(UNKNOWNS),
-                                  error=str(text))))  # fmt: skip
+                                  errors=[record])))  # fmt: skip
         print(f"{prog}: error: {text}", file=sys.stderr)
         return 2
     for warning in caught:

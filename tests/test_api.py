@@ -155,6 +155,25 @@ def test_to_control(dc_drive):
     np.testing.assert_allclose(control.dcgain(G), 1.0)  # G(0) = 10/10
 
 
+def test_several_unknowns_go_to_scipy_and_control_as_a_vector_a_dict_or_by_name():
+    motor = mtt.load(mtt.example("dc_motor"))  # unknowns (ra, jl)
+    # (0.1 s + ra)((1 + jl) s + 0.1) + 1 at ra = 2, jl = 5, normalised as scipy does
+    expected = np.array([0.6, 12.01, 1.2]) / 0.6
+    for G in (
+        motor.to_scipy([2, 5]),
+        motor.to_scipy(np.array([2.0, 5.0])),
+        motor.to_scipy({"jl": 5, "ra": 2}),
+        motor.to_scipy(ra=2, jl=5),
+        motor.to_scipy({"ra": 2}, jl=5),
+    ):
+        np.testing.assert_allclose(G.den, expected, rtol=1e-15)
+    den = motor.to_control([2, 5]).den[0][0]
+    np.testing.assert_allclose(den / den[0], expected, rtol=1e-15)
+    assert "give k as a sequence of 2 values" in str(kind_of(motor.to_scipy, 2))
+    assert kind_of(motor.to_scipy, [1, 2, 3]).kind == "bad_argument"
+    assert "ra is given twice" in str(kind_of(motor.to_scipy, [1, 2], ra=1))
+
+
 def test_to_control_without_python_control_says_how_to_install(dc_drive, monkeypatch):
     monkeypatch.setitem(sys.modules, "control", None)  # import control -> ImportError
     error = kind_of(dc_drive.to_control, 10)
@@ -219,6 +238,10 @@ def test_model_errors_are_mtt_errors_located_at_the_first_error():
         ({"set": {"r": "abc"}}, "undeclared_parameter", "'abc'"),
         ({"keep": ["x"]}, "undeclared_parameter", "'x'"),
         ({"unknowns": "x"}, "undeclared_parameter", "x"),
+        ({"keep": 3}, "bad_value", "keep takes parameter names, not 3"),
+        ({"input": 3}, "bad_value", "input takes a component TYPE:NAME, not 3"),
+        ({"output": ["De:vc"]}, "bad_value", "output takes a component TYPE:NAME"),
+        ({"set": "r=2"}, "bad_value", "set takes a dict {name: value}, not 'r=2'"),
     ],
 )
 def test_bad_options_are_mtt_errors(options, kind, says):

@@ -66,3 +66,27 @@ def test_set_with_a_name_for_a_value_says_what_a_value_is(capsys):
     err = capsys.readouterr().err
     assert "unknown name 'abc' (a value here is a number or an expression of numbers)" in err
     assert "(use )" not in err
+
+
+@pytest.mark.parametrize(
+    ("argv", "says"),
+    [
+        (["tf", RLC, "--set", "r=abc"], "argument --set: bad value in 'r=abc'"),
+        (["ss", RLC, "--bogus"], "unrecognized arguments: --bogus"),
+        (["bode", RLC, "--k", "x"], "argument --k: expected numbers separated by commas"),
+        (["simulate", RLC, "--hold", "cubic"], "argument --hold: invalid choice: 'cubic'"),
+        (["compile"], "the following arguments are required: FILE"),
+    ],
+)
+def test_a_bad_command_line_with_json_prints_ok_false_too(capsys, argv, says):
+    with pytest.raises(SystemExit) as done:
+        main([*argv, "--json"])
+    out, err = capsys.readouterr()
+    assert done.value.code == 2 and says in err and "usage: mtt" in err
+    (error,) = json.loads(out)["errors"]
+    assert json.loads(out)["ok"] is False
+    assert error["kind"] == "usage" and error["message"].startswith(says)
+    with pytest.raises(SystemExit) as done:  # without --json: the message alone, no JSON
+        main(argv)
+    out, err = capsys.readouterr()
+    assert done.value.code == 2 and says in err and out == ""

@@ -142,6 +142,30 @@ def test_parameter_names_cannot_collide_with_the_modules_own_names():
     assert module.theta(np=1.0)[3, 0] == 2.0
 
 
+def test_the_module_is_imported_without_writing_a_file(monkeypatch, tmp_path):
+    import linecache
+    import tempfile
+    import warnings
+
+    monkeypatch.setattr(tempfile, "tempdir", str(tmp_path / "missing"))  # no temporary files
+    monkeypatch.chdir(tmp_path)
+    module = codegen.load(dc_drive_theta(model="drive_in_memory"))
+    assert sys.modules["_mtt_generated_drive_in_memory"] is module
+    assert module is codegen.load(dc_drive_theta(model="drive_in_memory"))
+    assert list(tmp_path.iterdir()) == []
+    # its lines are there for tracebacks, warnings and inspect, under a name that is no file
+    assert module.__file__ == "<_mtt_generated_drive_in_memory>"
+    assert inspect.getsource(module.fit).startswith("def fit(t, u, y, *")
+    t = np.linspace(0.0, 10.0, 201)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        module.fit(t, np.ones_like(t), module.simulate(t, np.ones_like(t), 10.0))
+    warning = next(w for w in caught if w.category is module.EstimationWarning)
+    assert warning.filename == module.__file__
+    line = linecache.getline(warning.filename, warning.lineno)
+    assert line.strip() and line == module._mtt_source.splitlines(True)[warning.lineno - 1]
+
+
 def test_kept_parameters_without_a_value_must_be_given():
     module = codegen.load(absorber_theta(defaults={"tau": None, "l": sympy.Rational(1, 2)}))
     assert module.DEFAULTS == {"tau": None, "l": 0.5}
@@ -185,12 +209,70 @@ def test_a_theta_that_is_not_polynomial_in_the_kept_parameters_is_refused():
     assert caught.value.kinds() == ["unsupported_theta"]
 
 
-def test_reserved_names_cover_the_generated_functions_arguments():
-    module = codegen.load(dc_drive_theta())
-    functions = (module.estimate, module.fit, module.Tracker.__init__, module.simulate)
-    for function in (*functions, module.transfer_function, module.theta):
-        names = set(inspect.signature(function).parameters) - {"known"}
-        assert names <= codegen.RESERVED, names - codegen.RESERVED
+def _taking_known(module) -> dict[str, set[str]]:
+    """Every function and method of a generated module that takes the kept parameters as
+    keyword arguments (**known), with the names of its other arguments."""
+    found = {}
+    for name, value in vars(module).items():
+        owners = [(name, value)]
+        if inspect.isclass(value) and value.__module__ == module.__name__:
+            owners += [(f"{name}.{attr}", member) for attr, member in vars(value).items()]
+        for label, function in owners:
+            if not inspect.isfunction(function) or function.__module__ != module.__name__:
+                continue
+            parameters = inspect.signature(function).parameters.values()
+            if any(p.kind is p.VAR_KEYWORD for p in parameters):
+                found[label] = {p.name for p in parameters if p.kind is not p.VAR_KEYWORD}
+    return found
+
+
+@pytest.mark.parametrize("theta", [dc_drive_theta, absorber_theta])
+def test_reserved_names_cover_the_generated_functions_arguments(theta):
+    taking = _taking_known(codegen.load(theta()))
+    # the public API with **known is all there (a rename would leave this test empty)
+    assert {"theta", "transfer_function", "simulate", "fit", "fit_records", "moments"} <= set(
+        taking
+    ) and {"estimate", "prior_weight", "Tracker.__init__"} <= set(taking)
+    for label, names in taking.items():
+        assert names <= codegen.RESERVED, (label, names - codegen.RESERVED)
+
+
+@pytest.mark.parametrize("name", ["records", "keep", "fraction"])
+def test_a_kept_parameter_named_like_an_argument_of_fit_records_or_prior_weight(name):
+    # fit_records(records, keep=...) and prior_weight(fraction=...) took these names: a
+    # kept parameter `keep` was silently the argument, `records` a TypeError
+    renamed = sympy.Symbol(name)
+    theta = dataclasses.replace(
+        absorber_theta(symbols=(name, "l")),
+        defaults={name: sympy.Integer(2), "l": sympy.Rational(1, 2)},
+        matrix=absorber_theta().matrix.subs(tau, renamed),
+    )
+    with pytest.raises(ModelError) as caught:
+        codegen.render(theta)
+    assert caught.value.kinds() == ["reserved_name"]
+    assert f"the parameter {name!r} cannot be kept symbolic" in str(caught.value)
+
+
+@pytest.mark.parametrize("name", ["__init__", "__main__", "sitecustomize", "usercustomize"])
+def test_module_names_python_runs_or_treats_specially_are_refused(name):
+    # generated/__init__.py would make a package of the directory, sitecustomize.py run
+    # at every interpreter start where it is on the path
+    with pytest.raises(ModelError) as caught:
+        codegen.render(dc_drive_theta(model=name))
+    assert caught.value.kinds() == ["reserved_name"]
+    assert f"the model name {name!r} is the name of a Python module" in str(caught.value)
+
+
+@pytest.mark.parametrize("file", ["numpy.py", "json.py", "__init__.py"])
+def test_an_output_file_named_as_a_module_is_refused(tmp_path, file):
+    with pytest.raises(ModelError) as caught:
+        codegen.output_path(str(tmp_path / file), dc_drive_theta())
+    assert caught.value.kinds() == ["reserved_name"]
+    assert f"{Path(file).stem} is the name of a Python module" in str(caught.value)
+    assert not (tmp_path / file).exists()
+    # other names, and files that are no module, are written as asked
+    for name in ("drive.py", "my-drive.py", "numpy.txt"):
+        assert codegen.output_path(str(tmp_path / name), dc_drive_theta()) == tmp_path / name
 
 
 def test_model_text_reaches_the_module_only_as_string_literals():
@@ -256,3 +338,28 @@ def test_write_atomic_replaces_whole_files_or_nothing(tmp_path, monkeypatch):
         codegen.write_atomic(target, "partial")
     assert target.read_text() == "new\n"
     assert [path.name for path in tmp_path.iterdir()] == ["module.py"]
+
+
+def test_model_unknown_and_parameter_names_of_the_modules_own_names_work(tmp_path):
+    """A model named like a module-level name of its estimator, with its unknown and a
+    kept parameter named like others (n, m, N are the module's degrees): all still work."""
+    import mtt
+
+    text = (
+        "model theta\nparam N = 2\nparam m = 0.5\nunknown n = 0.1\n"
+        "Se:v -> 1:loop\n1:loop -> R:N\n1:loop -> I:m\n1:loop -> C:n\n1:loop -> Df:i\n"
+    )
+    model = mtt.load(text, keep="m")
+    path = model.compile(tmp_path)
+    assert path.name == "theta.py"
+    program = (
+        "import numpy as np, theta\n"
+        "t = np.linspace(0.0, 10.0, 501); u = np.ones_like(t)\n"
+        "y = theta.simulate(t, u, 0.1, m=0.25)\n"
+        "fit = theta.fit(t, u, y, offset=False, initial_state=False, m=0.25)\n"
+        "print(theta.n, theta.m, theta.N, theta.UNKNOWN, theta.PARAMETERS, round(fit.k, 4))\n"
+    )
+    done = subprocess.run(
+        [sys.executable, "-c", program], cwd=tmp_path, capture_output=True, text=True, check=True
+    )
+    assert done.stdout.split() == ["2", "1", "1", "n", "('m',)", "0.1"]

@@ -391,3 +391,14 @@ def test_json_results_say_ok(tmp_path, capsys):
     assert status == 0 and record["ok"] and record["t"] == [0.0, 0.5, 1.0] and len(record["y"]) == 3
     status, out, _ = mtt(capsys, "simulate", DC_DRIVE, "--dt", "-1", "--json")
     assert status == 2 and json.loads(out)["ok"] is False
+
+
+@pytest.mark.parametrize("command", ["simulate", "fit"])
+def test_a_simulation_that_overflows_is_an_error_not_nan_in_json(capsys, command):
+    # rlc at c = -0.001: poles at -2 +- sqrt(2004), the output beyond floats near t = 16.6
+    rlc = str(ROOT / "models" / "rlc.bg")
+    status, out, err = mtt(capsys, command, rlc, "--true", "-0.001", "--t-end", "1000", "--json")
+    (error,) = json.loads(out)["errors"]
+    assert status == 2 and "NaN" not in out and "Infinity" not in out
+    assert error["message"].startswith("the simulated output overflows at t = 16.")
+    assert "the model is unstable with c = -0.001; shorten --t-end or choose another --true" in err

@@ -294,3 +294,22 @@ def test_the_module_command_line_fits_several_files(dc_drive, tmp_path, capsys):
     status = dc_drive.main(["fit", paths[0]])
     out, err = capsys.readouterr()
     assert status == 2 and "no column 't' (the header names time, volts, speed)" in err
+
+
+def test_the_module_command_line_fails_in_json_as_mtt_fit_does(dc_drive, tmp_path, capsys):
+    import json
+
+    import mtt
+    from mtt.cli.main import main as mtt_main
+
+    missing = str(tmp_path / "missing.csv")
+    status = dc_drive.main(["fit", missing, "--json"])
+    record = json.loads(capsys.readouterr().out)
+    assert status == 2 and record["ok"] is False and record["model"] == "dc_drive"
+    (error,) = record["errors"]
+    assert error == {"file": None, "kind": "usage", "line": None, "column": None,
+                     "message": f"{missing}: No such file or directory", "notes": []}  # fmt: skip
+    # mtt fit's record of the same failure has the same fields
+    assert mtt_main(["fit", str(mtt.example("dc_drive")), "--data", missing, "--json"]) == 2
+    (theirs,) = json.loads(capsys.readouterr().out)["errors"]
+    assert theirs.keys() == error.keys() and theirs["message"] == error["message"]

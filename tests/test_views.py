@@ -10,7 +10,7 @@ import pytest
 import sympy
 
 import mtt
-from mtt.cli import bode, draw
+from mtt.cli import bode, draw, views
 from mtt.cli.main import main
 from mtt.derivation.causality import assign
 from mtt.derivation.pipeline import load
@@ -153,6 +153,15 @@ def test_mtt_bode_usage_errors(capsys, argv, says):
     except SystemExit as exit:
         status = exit.code
     assert status == 2 and says in capsys.readouterr().err
+
+
+def test_mtt_bode_of_a_zero_transfer_function_is_an_error_without_warnings(tmp_path, capsys):
+    # rlc's G(s) = 2cs / (cs^2 + 4cs + 2) is zero at c = 0: scipy warned and gave -inf dB,
+    # which --json printed as -Infinity (not JSON)
+    status, out, err = run(capsys, "bode", str(mtt.example("rlc")), "--k", "0,1", "--json")
+    assert status == 2 and json.loads(out)["errors"][0]["kind"] == "bad_value"
+    assert err == "error[bad_value]: G(s) is zero at c = 0: there is no Bode diagram\n"
+    assert views._finite(np.array([[1.5, -np.inf, np.nan]])) == [[1.5, None, None]]
 
 
 def test_the_figure_has_a_line_a_barb_and_a_stroke_per_bond():

@@ -53,10 +53,16 @@ def _source(path_or_text: str | Path) -> Source:
 def _names(option: str, value: str | Iterable[str] | None) -> tuple[str, ...]:
     if value is None:
         return ()
-    names = value.split(",") if isinstance(value, str) else list(value)
-    if not all(isinstance(name, str) for name in names):
+    names = value.split(",") if isinstance(value, str) else value
+    if not isinstance(names, Iterable) or not all(isinstance(name, str) for name in names):
         raise MttError(f"{option} takes parameter names, not {value!r}", kind="bad_value")
     return tuple(name.strip() for name in names if name.strip())
+
+
+def _component(option: str, value: object) -> str | None:
+    if value is None or isinstance(value, str):
+        return value
+    raise MttError(f"{option} takes a component TYPE:NAME, not {value!r}", kind="bad_value")
 
 
 def load(
@@ -94,14 +100,16 @@ def load(
     >>> mtt.load(model.source.text, set={"r": 2000}).transfer_function.expr
     1/(2000*c*s + 1)
     """
+    if set is not None and not isinstance(set, Mapping):
+        raise MttError(f"set takes a dict {{name: value}}, not {set!r}", kind="bad_value")
     overrides = {name: exact(name, value) for name, value in (set or {}).items()}
     chosen = _names("unknowns", unknowns)
     choice = ParameterChoice(
         unknowns=chosen or None,
         keep=frozenset(_names("keep", keep)),
         overrides=MappingProxyType(overrides),
-        input=input,
-        output=output,
+        input=_component("input", input),
+        output=_component("output", output),
     )
     source = _source(path_or_text)
     graph = build(parse(source), choice.selection)
@@ -228,20 +236,33 @@ class Model:
         return identifiability(self._checked_theta())
 
     def to_scipy(self, k: object = None, **known: object):
-        """scipy.signal.TransferFunction at unknown = k (default: the file's value); the
-        values of other names (several unknowns, kept parameters) by keyword.
+        """scipy.signal.TransferFunction at unknown = k (default: the file's value). With
+        several unknowns k is a sequence in the order of `unknowns`, or a dict by name;
+        any name (an unknown, a kept parameter) may also be given by keyword.
 
         >>> import mtt
         >>> G = mtt.load(mtt.example("dc_drive")).to_scipy(10)
         >>> G.num.tolist(), G.den.tolist()
         ([10.0, 0.0, 1.0], [1.0, 10.0, 11.1, 11.0, 1.0])
+        >>> motor = mtt.load(mtt.example("dc_motor"))  # unknowns ra, jl
+        >>> motor.to_scipy([1, 10]).den.tolist() == motor.to_scipy(ra=1, jl=10).den.tolist()
+        True
         """
         import scipy.signal
 
         return scipy.signal.TransferFunction(*self._coefficients(k, known))
 
     def to_control(self, k: object = None, **known: object):
-        """python-control's TransferFunction at unknown = k (pip install 'mtt[control]')."""
+        """python-control's TransferFunction at unknown = k, given as to `to_scipy`
+        (pip install 'mtt[control]').
+
+        >>> import mtt
+        >>> G = mtt.load(mtt.example("dc_drive")).to_control(10)
+        >>> G.num[0][0].tolist(), G.den[0][0].tolist()
+        ([100.0, 0.0, 10.0], [10.0, 100.0, 111.0, 110.0, 10.0])
+        >>> float(G.dcgain())
+        1.0
+        """
         try:
             import control
         except ImportError:
@@ -254,17 +275,23 @@ class Model:
     def _coefficients(self, k: object, known: dict):
         values = dict(known)
         if k is not None:
-            if len(self.unknowns) != 1:
-                raise MttError(
-                    f"{self.name} has {len(self.unknowns)} unknowns: give each by name",
-                    kind="bad_argument",
-                )
-            values[self.unknowns[0]] = k
+            given = _by_name(self.name, self.unknowns, k)
+            both = sorted(values.keys() & given.keys())
+            if both:
+                raise MttError(f"{both[0]} is given twice: in k and by name", kind="bad_argument")
+            values.update(given)
         return self.transfer_function.at(**values)
 
     def compile(self, path: str | Path) -> Path:
         """Write the standalone estimator module (numpy and scipy only) to `path`, or to
-        MODEL.py inside it when it is a directory; return the file written."""
+        MODEL.py inside it when it is a directory; return the file written.
+
+        >>> import mtt, tempfile
+        >>> with tempfile.TemporaryDirectory() as folder:
+        ...     path = mtt.load(mtt.example("rlc")).compile(folder)
+        ...     print(path.name, path.read_text().splitlines()[0][3:])
+        rlc.py Identify the unknown parameter c of the model rlc from input/output data.
+        """
         theta = self._checked_theta()
         try:
             target = codegen.output_path(str(path), theta)
@@ -281,11 +308,27 @@ class Model:
 
     def estimator(self) -> ModuleType:
         """The generated estimator module, imported without writing a file: the same
-        module `compile` writes (its docstring is its manual)."""
+        module `compile` writes (its docstring is its manual).
+
+        >>> import mtt
+        >>> module = mtt.load(mtt.example("rlc")).estimator()
+        >>> module.UNKNOWN, module.TRUE_VALUE, (module.n, module.m, module.N)
+        ('c', 0.1, (2, 1, 1))
+        >>> module.transfer_function(0.1)[1].tolist()
+        [0.1, 0.4, 2.0]
+        """
         return self._estimator
 
     def simulate(self, t, u, k: object = None, **options):
-        """The generated module's `simulate(t, u, k, ...)`; k defaults to the file's value(s)."""
+        """The generated module's `simulate(t, u, k, ...)`; k defaults to the file's value(s).
+
+        >>> import mtt, numpy as np
+        >>> rlc = mtt.load(mtt.example("rlc"))  # G(s) = 2cs / (cs^2 + 4cs + 2), c = 0.1
+        >>> t = np.linspace(0.0, 10.0, 1001)
+        >>> y = rlc.simulate(t, np.ones_like(t))  # a unit step: y = exp(-2t) sin(4t) / 2
+        >>> round(float(y.max()), 3), round(float(y[-1]), 3)
+        (0.257, 0.0)
+        """
         module = self._estimator
         k = module.TRUE_VALUE if k is None else k
         if k is None:
@@ -295,14 +338,50 @@ class Model:
         return _delegate(module.simulate, t, u, k, **options)
 
     def estimate(self, t, u, y, **options):
-        """The generated module's recursive `estimate(t, u, y, *, k0, ...)` -> Estimate."""
+        """The generated module's recursive `estimate(t, u, y, *, k0, ...)` -> Estimate: the
+        paper's estimate at every sample, from k0.
+
+        >>> import mtt, numpy as np
+        >>> rlc = mtt.load(mtt.example("rlc"))
+        >>> t = np.linspace(0.0, 10.0, 1001)
+        >>> u = np.ones_like(t)
+        >>> run = rlc.estimate(t, u, rlc.simulate(t, u), k0=0.5)
+        >>> run.khat.shape, float(run.khat[0]), round(run.k, 4)  # k: the last of khat
+        ((1001,), 0.5, 0.1)
+        """
         return _delegate(self._estimator.estimate, t, u, y, **options)
 
     def fit(self, t, u, y, **options):
         """The generated module's batch `fit(t, u, y, *, method="iv", C="auto", bounds,
         offset, initial_state, hold, ...)` -> Fit: k over whole records (lists of arrays for
-        several), unbiased under output noise, with k_se, ci, fit_percent and warnings."""
+        several), unbiased under output noise, with k_se, ci, fit_percent and warnings.
+
+        >>> import mtt, numpy as np
+        >>> rlc = mtt.load(mtt.example("rlc"))
+        >>> t = np.linspace(0.0, 10.0, 1001)
+        >>> u = np.ones_like(t)
+        >>> found = rlc.fit(t, u, rlc.simulate(t, u), offset=False, initial_state=False)
+        >>> found.ok, round(found.k, 6), bool(found.k_se < 1e-6), found.ci[1] - found.ci[0] > 0
+        (True, 0.1, True, True)
+        """
         return _delegate(self._estimator.fit, t, u, y, **options)
+
+
+def _by_name(model: str, unknowns: tuple[str, ...], k: object) -> dict[str, object]:
+    """k as values by name: one unknown's value, or a sequence in the order of the unknowns,
+    or a dict by name."""
+    if isinstance(k, Mapping):
+        return dict(k)
+    if len(unknowns) == 1:
+        return {unknowns[0]: k}
+    if isinstance(k, str) or not hasattr(k, "__len__") or len(k) != len(unknowns):
+        raise MttError(
+            f"{model} has {len(unknowns)} unknowns ({', '.join(unknowns)}): give k as a "
+            f"sequence of {len(unknowns)} values in that order, a dict by name, or each by "
+            f"keyword, not {k!r}",
+            kind="bad_argument",
+        )
+    return dict(zip(unknowns, k, strict=True))
 
 
 def _delegate(function, *args, **options):

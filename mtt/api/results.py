@@ -179,7 +179,7 @@ class TransferFunction:
 
 @dataclass(frozen=True)
 class Theta:
-    """The paper's matrix: theta(k) = [a0..an, -b0..-bm] = matrix * K, with K the column of
+    r"""The paper's matrix: theta(k) = [a0..an, -b0..-bm] = matrix * K, with K the column of
     `monomials` of the unknowns (1, k, k^2, ... for one unknown k): what the estimator is
     built from.
 
@@ -191,6 +191,8 @@ class Theta:
     Matrix([
     [10, 10,  1,  0, 0, -10, 0,   0],
     [ 0, 10, 11, 10, 1,   0, 0, -10]])
+    >>> print(mtt.load(mtt.example("rlc")).theta._repr_latex_())  # what Jupyter shows
+    $\displaystyle \Theta = \left[\begin{matrix}2 & 0\\0 & 4...K^T = ...1 & c\end{matrix}\right]$
     """
 
     theta: derived.Theta
@@ -254,7 +256,17 @@ class Theta:
 @dataclass(frozen=True)
 class StateSpace:
     """The descriptor form E x' = A x + B u, y = C x + D u: exact sympy matrices, with
-    x the energy variables (q of each C, p of each I) named in `states`."""
+    x the energy variables (q of each C, p of each I) named in `states`.
+
+    >>> import mtt
+    >>> ss = mtt.load(mtt.example("rlc")).state_space  # r = 2, l = 1/2, c unknown
+    >>> ss.states
+    ('p_l', 'q_c')
+    >>> ss.A, ss.B.T, ss.C
+    (Matrix([
+    [-4, -1/c],
+    [ 2,    0]]), Matrix([[1, 0]]), Matrix([[2, 0]]))
+    """
 
     equations: Equations
 
@@ -292,7 +304,15 @@ class StateSpace:
 
 @dataclass(frozen=True)
 class Causality:
-    """The causal strokes: for each bond, the component that receives its effort."""
+    """The causal strokes: for each bond, the component that receives its effort.
+
+    >>> import mtt
+    >>> causality = mtt.load(mtt.example("rlc")).causality  # a series loop: I:l sets its flow
+    >>> causality.strokes
+    {1: '1:loop', 2: '1:loop', 3: 'I:l', 4: '1:loop', 5: '1:loop'}
+    >>> causality.dependent, causality.loops
+    ((), ())
+    """
 
     causal: CausalBondGraph
 

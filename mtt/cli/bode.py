@@ -36,7 +36,8 @@ def bode(systems: Sequence[tuple[float, np.ndarray, np.ndarray]]) -> Bode:
     w = np.logspace(np.log10(low), np.log10(high), POINTS)
     magnitude, phase = [], []
     for _, num, den in systems:
-        _, mag, ph = signal.bode((num, den), w)
+        with np.errstate(divide="ignore"):  # a zero exactly on the grid: -inf dB
+            _, mag, ph = signal.bode((num, den), w)
         magnitude.append(mag)
         phase.append(ph)
     return Bode(tuple(k for k, _, _ in systems), w, np.array(magnitude), np.array(phase))

@@ -114,8 +114,15 @@ def experiment_data(module: ModuleType, args, several: bool = False) -> list[Dat
             f"the model gives no value of {', '.join(k)} to simulate with: pass --true {example}"
         )
     clean = module.simulate(t, u, k, hold=args.hold)
+    named = unknowns.named(module, k, "g")
+    if not np.isfinite(clean).all():  # not NaN and Infinity in CSV and (invalid) JSON
+        when = t[np.argmin(np.isfinite(clean))]
+        raise UsageError(
+            f"the simulated output overflows at t = {when:g}: the model is unstable with "
+            f"{named}; shorten --t-end or choose another --true"
+        )
     seed = DEFAULT_SEED if args.seed is None else args.seed
-    note = f"{t.size} samples simulated with {unknowns.named(module, k, 'g')}, input {source}"
+    note = f"{t.size} samples simulated with {named}, input {source}"
     y = clean
     if args.noise_uniform:
         noise = args.noise_uniform

@@ -41,6 +41,24 @@ def _print_json(value) -> None:
     print(json.dumps(value, sort_keys=False))
 
 
+class UsageExit(SystemExit):
+    """argparse's exit on a bad command line (status 2), with its message kept, so that
+    `main` can also print it as JSON when --json was asked for."""
+
+    def __init__(self, message: str):
+        super().__init__(EXIT_MODEL_ERROR)
+        self.message = message
+
+
+class _Parser(argparse.ArgumentParser):
+    """argparse's parser (its subcommands' too), exiting with a `UsageExit`."""
+
+    def error(self, message: str):
+        self.print_usage(sys.stderr)
+        print(f"{self.prog}: error: {message}", file=sys.stderr)
+        raise UsageExit(message)
+
+
 # check / show -----------------------------------------------------------------
 
 
@@ -309,7 +327,7 @@ def cmd_theta(args) -> int:
 
 
 def make_parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(
+    parser = _Parser(
         prog="mtt",
         description="Bond graph models of partially known systems: check them, derive their "
         "transfer function polynomial in the unknown parameter, and generate estimators.",
@@ -377,7 +395,13 @@ def make_parser() -> argparse.ArgumentParser:
 
 
 def main(argv: list[str] | None = None) -> int:
-    args = make_parser().parse_args(argv)
+    argv = sys.argv[1:] if argv is None else list(argv)
+    try:
+        args = make_parser().parse_args(argv)
+    except UsageExit as exc:  # --json promises {"ok": false, ...} for every failure
+        if "--json" in argv:
+            _print_json(MttError(exc.message, kind="usage").to_json())
+        raise
     try:
         status = args.run(args)
         sys.stdout.flush()  # a closed pipe shows here, inside the handlers below

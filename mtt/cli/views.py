@@ -44,7 +44,15 @@ def _values(text: str) -> list[float]:
 
 
 def _print_json(record: dict) -> None:
-    print(json.dumps(record))
+    print(json.dumps(record, allow_nan=False))
+
+
+def _finite(array) -> list:
+    """An array as JSON lists, null where a value is not finite (a zero of G(jw) exactly on
+    the grid is -inf dB): JSON has no infinities."""
+    import numpy as np
+
+    return np.where(np.isfinite(array), array, None).tolist()
 
 
 def _save(figure, path: str) -> None:
@@ -106,6 +114,9 @@ def cmd_bode(args) -> int:
     systems = []
     for k in values:
         num, den = model.transfer_function.at(**({unknown: k} if unknown else {}))
+        if not num.any():  # no magnitude in dB, no phase (scipy warns and gives -inf)
+            at = f" at {unknown} = {k:g}" if unknown else ""
+            raise MttError(f"G(s) is zero{at}: there is no Bode diagram", kind="bad_value")
         systems.append((float(k) if unknown else float("nan"), num, den))
     data = bode.bode(systems)
     if args.out:
@@ -115,8 +126,8 @@ def cmd_bode(args) -> int:
         _print_json(
             {"ok": True, "file": args.file, "out": args.out, "model": model.name,
              "unknown": unknown, "k": list(data.values),
-             "frequency": data.frequency.tolist(), "magnitude_db": data.magnitude_db.tolist(),
-             "phase_deg": data.phase_deg.tolist()}
+             "frequency": data.frequency.tolist(), "magnitude_db": _finite(data.magnitude_db),
+             "phase_deg": _finite(data.phase_deg)}
         )  # fmt: skip
     elif args.out:
         print(f"wrote {args.out}: Bode diagram of {model.name} for {len(values)} value(s)")

@@ -12,8 +12,8 @@ from __future__ import annotations
 
 import errno
 import importlib.machinery
-import importlib.util
 import keyword
+import linecache
 import math
 import os
 import re
@@ -34,11 +34,16 @@ from mtt.language.diagnostics import ModelError, Source, error
 from mtt.resources import resource_dir
 
 # Keyword names of the generated functions: a kept parameter, passed as a keyword
-# argument (`estimate(..., tau=2)`), must not take one of them.
+# argument (`estimate(..., tau=2)`), must not take one of them (tests/test_codegen.py
+# holds that this covers every function and method of a module that takes **known).
 RESERVED = frozenset(
     {"t", "u", "y", "k", "k0", "beta", "S0", "C", "hold", "method", "rtol", "atol"}
     | {"max_step", "progress", "engine", "bounds", "self", "known", "offset", "initial_state"}
+    | {"records", "keep", "fraction"}  # fit_records, prior_weight
 )
+# Run by the interpreter at start-up wherever they are on its path (as are a package's
+# __init__ and __main__: every __dunder__ name is refused too).
+SPECIAL_MODULES = frozenset({"sitecustomize", "usercustomize"})
 # Characters that sympy's printing of an exact number may use; text made only of them
 # cannot end a docstring or a string literal.
 _PLAIN = re.compile(r"[\w .*/+\-()]+")
@@ -50,9 +55,11 @@ def _fail(theta: Theta, kind: str, message: str) -> ModelError:
 
 def _shadows(name: str) -> bool:
     """Whether an estimator module of this name would shadow a module for code run beside
-    it: one of the standard library's, or one installed (numpy, scipy, ...). The current
+    it: one of the standard library's, or one installed (numpy, scipy, ...), or a name
+    Python gives a meaning wherever it is (__init__, __main__, sitecustomize). The current
     directory is not looked in: an estimator written there before is no module to keep."""
-    if name in sys.stdlib_module_names or name in sys.builtin_module_names:
+    special = name in SPECIAL_MODULES or (name.startswith("__") and name.endswith("__"))
+    if special or name in sys.stdlib_module_names or name in sys.builtin_module_names:
         return True
     here = {"", os.getcwd()}
     return (
@@ -325,6 +332,13 @@ def output_path(given: str | None, theta: Theta) -> Path:
     path = Path(given)
     if path.is_dir() or given.endswith(("/", os.sep)):
         return path / default_path(theta).name
+    if path.suffix == ".py" and path.stem != theta.model and _shadows(path.stem):
+        raise _fail(
+            theta,
+            "reserved_name",
+            f"-o {given}: {path.stem} is the name of a Python module: the estimator module "
+            f"{path.name} would shadow it wherever it is imported; choose another file name",
+        )
     return path
 
 
@@ -368,29 +382,28 @@ def write_atomic(path: str | Path, data: str | bytes) -> None:
 
 
 def load(theta: Theta) -> types.ModuleType:
-    """The generated module for `theta`, imported: what `mtt simulate/estimate` run.
+    """The generated module for `theta`, imported without writing a file: what `mtt
+    simulate/estimate` and `Model.estimator()` run.
 
     The source is the same text `mtt compile` writes (see the module docstring for why
-    running it is safe). It is written to a temporary directory and imported from there
-    by the standard import machinery, as a user's `import` of a compiled module would be,
-    and registered in sys.modules so that its dataclass can find its own module. Loading
-    the same source again gives the module already loaded.
+    running it is safe), run as the module `_mtt_generated_MODEL`, registered in
+    sys.modules so that its dataclasses find their own module, and in linecache under
+    the name `<_mtt_generated_MODEL>` so that tracebacks, warnings and inspect show its
+    lines. Loading the same source again gives the module already loaded.
     """
     name = f"_mtt_generated_{theta.model}"
     text = render(theta)
     loaded = sys.modules.get(name)
     if loaded is not None and getattr(loaded, "_mtt_source", None) == text:
         return loaded  # the same module: objects made by it still pickle as its own
-    with tempfile.TemporaryDirectory(prefix="mtt-") as directory:
-        path = Path(directory) / f"{name}.py"
-        path.write_text(text, encoding="utf-8")
-        spec = importlib.util.spec_from_file_location(name, path)
-        module = importlib.util.module_from_spec(spec)
-        sys.modules[name] = module
-        try:
-            spec.loader.exec_module(module)
-        except BaseException:
-            del sys.modules[name]
-            raise
+    module = types.ModuleType(name)
+    module.__file__ = f"<{name}>"  # no file: the text is in linecache
+    linecache.cache[module.__file__] = (len(text), None, text.splitlines(True), module.__file__)
+    sys.modules[name] = module
+    try:
+        exec(compile(text, module.__file__, "exec"), module.__dict__)
+    except BaseException:
+        del sys.modules[name]
+        raise
     module._mtt_source = text
     return module
