@@ -1486,7 +1486,12 @@ def _search(T: np.ndarray, centre, box: np.ndarray, starts=()) -> _Minima:
 # signals it sums, adds nothing. Otherwise, once forgetting has shrunk the stored
 # information, the rounding of a settled record would move the estimate. The threshold is
 # NOISE (1 + memory / step) eps: a filter state's rounding accumulates over the steps of
-# the filter's memory (its slowest time constant).
+# the filter's memory (its slowest time constant). The contribution q = v^T W v itself is
+# rounding noise sooner, as |phi|^2 cancels out of terms of the size of |v|^2: an interval
+# whose every coefficient of q is within NOISE eps |W_p| |v|^2 adds nothing either (that
+# product's error, W's own rounding included, measured against 34-digit arithmetic on
+# settled step responses of the DC drive and the absorber, C(s) = (1 + sT)^(n+1) for
+# T = 0.05, 1, 10, steps 1e-3 and 1e-2: at most 0.81 eps |W_p| |v|^2, Frobenius norm).
 
 
 @dataclass(frozen=True)
@@ -1543,6 +1548,24 @@ class _Setup:
     def limit(self, steps):
         """The noise threshold for intervals of these steps, relative to eps times floor."""
         return NOISE * EPS * (1.0 + self.memory / steps)
+
+    @staticmethod
+    def rounding(q: np.ndarray, V: np.ndarray, scales: np.ndarray) -> np.ndarray:
+        """Whether each interval's contribution q (intervals, len(BASIS)) = v^T W_p v is
+        rounding noise: every coefficient within NOISE eps |W_p| |v|^2 (see above); scales
+        holds NOISE eps |W_p| for each interval's step (one row, or one per interval)."""
+        size = np.einsum("nd,nd->n", V, V)
+        quiet = np.abs(q[:, 0]) <= size * scales[:, 0]  # the constant term first: cheap
+        found = np.flatnonzero(quiet)
+        if found.size:
+            bounds = size[found, None] * np.broadcast_to(scales, q.shape)[found]
+            quiet[found] = (np.abs(q[found]) <= bounds).all(-1)
+        return quiet
+
+
+def _rounding_scales(W: np.ndarray) -> np.ndarray:
+    """NOISE eps |W_p| (Frobenius norm) for each step and power: see `_Setup.rounding`."""
+    return NOISE * EPS * np.sqrt(np.einsum("...de,...de->...", W, W))
 
 
 def _moments_input(z0: np.ndarray, y: np.ndarray, u: np.ndarray, maps, index) -> np.ndarray:
@@ -1622,7 +1645,8 @@ class _Run:
                 self.cache[key] = tuple(part[0] for part in self.setup.maps(np.array([h])))
             found.append(self.cache[key])
         maps = tuple(np.stack(parts) for parts in zip(*found, strict=True))
-        self.step = (steps[0], found[0], maps) if len(found) == 1 else None
+        self.step = (steps[0], found[0], maps, _rounding_scales(found[0][2]).tolist()) \
+            if len(found) == 1 else None  # fmt: skip
         return maps
 
     def _one(self, t: float, u: float, y: float) -> bool:
@@ -1635,6 +1659,7 @@ class _Run:
         if not (SCALAR and self.ok and step and abs(h - step[0]) <= TIME_RESOLUTION * abs(t)):
             return False
         Phi, Gamma, W = step[1]
+        scales = step[3]
         order = Phi.shape[-1]
         ends = np.array([[self.y, y], [self.u, u]])
         following = self.z.reshape(2, order) @ Phi.T + (ends[:, None] @ Gamma)[:, 0]
@@ -1648,6 +1673,10 @@ class _Run:
             return False
         q = [0.0] * len(self.P) if quiet else ((W @ v) @ v).tolist()
         q[0], q[-1] = max(q[0], 0.0), max(q[-1], 0.0)
+        size = 0.0 if quiet else float(v @ v)
+        if not quiet and q[0] <= size * scales[0]:  # the constant term first: cheap
+            if all(abs(value) <= size * scale for value, scale in zip(q, scales, strict=True)):
+                quiet, q = True, [0.0] * len(self.P)  # rounding noise: see _Setup.rounding
         factor = math.exp(growth)
         P = [p + factor * value for p, value in zip(self.P.tolist(), q, strict=True)]
         k = self.khat
@@ -1717,6 +1746,7 @@ class _Run:
         q = _interval_costs(rows[:-1], maps[2], steps.index)
         noise = setup.noise(rows[:, :width])
         quiet = setup.quiet(noise, steps.values if steps.index is None else steps.at(steps.values))
+        quiet |= setup.rounding(q, rows[:-1], steps.at(_rounding_scales(maps[2])))
         self.noise = (noise[0][-1:], noise[1][-1:])
         if quiet.any():
             q[quiet] = 0.0

@@ -181,6 +181,33 @@ def test_no_information_no_update(dc_drive):
     after = result.t > result.informed_until
     assert np.all(result.khat[after] == result.khat[after][0])
     assert np.all(np.isfinite(result.J)) and np.all(result.J[0] > 0)
+    # From about 150 s the contributions v^T W v are rounding noise (|phi|^2 within eps of
+    # |v|^2 |W|), though phi itself is not yet: they must not move k^ either (they moved
+    # it by 1.6e-6 relative, from 9.99996963 to 9.99998529, before they were recognised).
+    settled = result.khat[np.searchsorted(result.t, 150.0)]
+    assert result.k == pytest.approx(settled, rel=1e-9)
+    assert 150.0 < result.informed_until < 200.0
+
+
+def test_a_settling_record_fed_in_chunks_gives_the_estimate(dc_drive):
+    """Chunk invariance where the data fade into rounding noise (the 1000-s step): chunks
+    of 1000 and single samples across the fading, as one estimate call, to 1e-9."""
+    t, u = step(1000.0)
+    y = dc_drive.simulate(t, u, 10.0)
+    whole = dc_drive.estimate(t, u, y, k0=5.0)
+    tracker = dc_drive.Tracker(k0=5.0)
+    edges = (
+        list(range(0, 14000, 1000)) + list(range(14000, 17000)) + list(range(17000, 30001, 1000))
+    )
+    edges.append(t.size)
+    worst = 0.0
+    for lo, hi in zip(edges, edges[1:], strict=False):
+        k = tracker.update(t[lo], u[lo], y[lo]) if hi == lo + 1 else tracker.update(
+            t[lo:hi], u[lo:hi], y[lo:hi])  # fmt: skip
+        worst = max(worst, abs(k - whole.khat[hi - 1]) / abs(whole.khat[hi - 1]))
+        assert tracker.global_k == pytest.approx(whole.global_k[hi - 1], rel=1e-9)
+    assert worst < 1e-9 and tracker.k == pytest.approx(whole.k, rel=1e-9)
+    assert tracker.informed_until == pytest.approx(whole.informed_until, abs=0.1)
 
 
 def test_a_tracker_fed_in_chunks_gives_the_estimate(absorber, noisy_absorber):
