@@ -2395,6 +2395,23 @@ def _prefilter(Theta: np.ndarray, k: float, C) -> np.ndarray:
     return f if C is None else np.convolve(f, C / C[0])
 
 
+def _overflow(t: np.ndarray, c: np.ndarray) -> str:
+    """Why a record's moments left floating point's range: its time scale against the filter's."""
+    with np.errstate(all="ignore"):
+        sizes = np.abs(np.roots(c))
+    constants = 1.0 / sizes[np.isfinite(sizes) & (sizes > 0)]
+    which = (
+        f"the filter's time constants are {constants.min():.3g} to {constants.max():.3g}"
+        if constants.size
+        else "the filter has no finite time constant"
+    )
+    return (
+        f"the moments of the filtered signals overflow floating point: the record spans "
+        f"{float(t[-1] - t[0]):.3g} time units with samples {float(np.median(np.diff(t))):.3g} "
+        f"apart, and {which}: are the times in the model's unit (seconds)?"
+    )
+
+
 def _record_moments(Theta, t, u, y, *, k, c, hold, offset, initial_state, beta, known) -> Moments:
     """`moments` for checked arrays and a resolved filter: c is C(s) for least squares
     (k None), else the extra factor of the prefilter (None for none)."""
@@ -2408,6 +2425,8 @@ def _record_moments(Theta, t, u, y, *, k, c, hold, offset, initial_state, beta, 
         signals.append(np.ones_like(t))
         holds, needs = holds + ("zoh",), needs + (last,)
     M = _filtered_moments(c, t, np.array(signals), holds, needs, beta)
+    if not np.isfinite(M).all():
+        raise ValueError(_overflow(t, c))
     if last >= first:  # drop s^i 1/F for i < first (no offset), then project the rest out
         start = M.shape[0] - last - 1  # where the unit step's derivatives begin
         keep = np.r_[np.arange(start), start + np.arange(first, last + 1)]
@@ -2690,15 +2709,33 @@ def _records(t, u, y) -> list[tuple[np.ndarray, np.ndarray, np.ndarray]]:
     """One record (arrays t, u, y) or several (lists of arrays), each checked."""
     several = isinstance(t, list | tuple) and len(t) > 0 and np.ndim(t[0]) > 0
     if not several:
-        return [tuple(_signals(("t", t), ("u", u), ("y", y), minimum=2))]
+        return [_in_range(_signals(("t", t), ("u", u), ("y", y), minimum=2), "")]
     lists = [("t", t), ("u", u), ("y", y)]
     for name, value in lists:
         if not isinstance(value, list | tuple) or len(value) != len(t):
             raise ValueError(f"{name} must be a list of {len(t)} arrays, one per record, like t")
     return [
-        tuple(_signals(*((f"{name}[{i}]", value[i]) for name, value in lists), minimum=2))
+        _in_range(_signals(*((f"{name}[{i}]", value[i]) for name, value in lists), minimum=2),
+                  f"[{i}]")  # fmt: skip
         for i in range(len(t))
     ]
+
+
+SIZE_LIMIT = 1e100  # |u| or |y| beyond it, or non-zero and all below its reciprocal: refused
+
+
+def _in_range(arrays, index: str) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The record, if the sums of products of its signals (the fit's moments, the residual
+    sums) stay within floating point's range; else a ValueError naming the signal."""
+    for name, w in zip(("u", "y"), arrays[1:], strict=True):
+        peak = float(np.abs(w).max())
+        if peak > SIZE_LIMIT or 0 < peak < 1 / SIZE_LIMIT:
+            raise ValueError(
+                f"{name}{index} reaches at most {peak:.3g} in magnitude: the fit's sums of "
+                f"products of the signals would {'overflow' if peak > 1 else 'underflow'} "
+                "floating point; give it in a unit that brings its values nearer 1"
+            )
+    return tuple(arrays)
 
 
 def _auto_filter(Theta: np.ndarray, k, records) -> np.ndarray:

@@ -1,0 +1,64 @@
+"""What `fit` and `estimate` say of records that cannot give a good estimate: data out of
+floating point's range."""
+
+from __future__ import annotations
+
+import warnings
+
+import numpy as np
+import pytest
+
+from mtt.cli.main import main
+
+
+def said(module, function, *args, **options) -> tuple[object, list[str]]:
+    """The result and the EstimationWarnings issued (which the result lists, in order)."""
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        result = function(*args, **options)
+    texts = [str(w.message) for w in caught if issubclass(w.category, module.EstimationWarning)]
+    assert texts == list(result.warnings)
+    return result, texts
+
+
+def prbs_record(module, t_end: float, snr_db: float | None, seed: int = 1, period: float = 0.2):
+    t = np.arange(0.0, t_end + 1e-9, 0.01)
+    u = module.input_signal("prbs", t, period=period)
+    y = module.simulate(t, u, 10.0, hold="zoh")
+    return t, u, y if snr_db is None else module.with_noise(y, snr_db, seed=seed)
+
+
+@pytest.mark.parametrize(
+    "scale,options,message",
+    [
+        (1e-200, {"C": "(1+s)^5"}, r"the moments of the filtered signals overflow floating point: "
+         r"the record spans 1e-199 time units with samples 1e-202 apart"),
+        (1e-30, {}, r"overflow floating point: the record spans 1e-29 time units"),
+        (1e10, {"offset": False, "initial_state": False}, r"spans 1e\+11 time units with samples "
+         r"1e\+08 apart, and the filter's time constants are 9\.99e\+08 to 1e\+09: are the times"),
+        (1e-300, {"C": "(1+s)^5", "method": "ls"}, r"are the times in the model's unit"),
+    ],
+)  # fmt: skip
+def test_times_out_of_scale_are_clear_errors(dc_drive, scale, options, message):
+    """Times in the wrong unit made the moments overflow: numpy's LinAlgError ('SVD did not
+    converge') escaped from fit, and the command line printed it after LAPACK's own lines."""
+    t, u, y = prbs_record(dc_drive, 10.0, None)
+    with pytest.raises(ValueError, match=message):
+        dc_drive.fit(t * scale, u, y, hold="zoh", **options)
+
+
+def test_values_out_of_range_are_clear_errors(dc_drive, tmp_path, capsys):
+    t, u, y = prbs_record(dc_drive, 10.0, 20.0)
+    for arguments, message in [
+        ((t, u, y * 1e200), r"^y reaches at most 9\.09e\+199 in magnitude: .* would overflow"),
+        ((t, u * 1e-200, y), r"^u reaches at most 1e-200 in magnitude: .* would underflow"),
+        (([t, t], [u, u], [y, y * 1e-300]), r"^y\[1\] reaches at most 9\.09e-301 in magnitude"),
+    ]:
+        with pytest.raises(ValueError, match=message):
+            dc_drive.fit(*arguments, hold="zoh")
+    path = tmp_path / "scaled.csv"
+    rows = zip((t * 1e-200).tolist(), u.tolist(), y.tolist(), strict=True)
+    path.write_text("t,u,y\n" + "".join(f"{a!r},{b!r},{c!r}\n" for a, b, c in rows))
+    status = main(["fit", "models/dc_drive.bg", "--data", str(path), "--filter", "(1+s)^5"])
+    err = capsys.readouterr().err
+    assert status == 2 and "overflow floating point" in err and "SVD" not in err
