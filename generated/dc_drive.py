@@ -2027,7 +2027,10 @@ def estimate(
     Theta = theta(**known)
     automatic = isinstance(C, str) and C.strip() == "auto"
     c = _auto_filter(Theta, k0, [(t, u, y)]) if automatic else filter_polynomial(C)
-    found = [] if automatic else _filter_warnings(c, np.diff(t))
+    if automatic:
+        found = _auto_filter_warnings(float(np.median(np.diff(t))), float(t[-1] - t[0]))
+    else:
+        found = _filter_warnings(c, np.diff(t))
     informed = None
     if engine == "ode":
         times, khat, J, stop = _integrate(
@@ -2986,6 +2989,21 @@ def _filter_warnings_at(c: np.ndarray, step: float) -> list[str]:
     ]
 
 
+def _auto_filter_warnings(step: float, span: float) -> list[str]:
+    """C='auto' on a record under SAMPLES_PER_FILTER^2 sampling intervals long: no time
+    constant is both SAMPLES_PER_FILTER intervals and a SAMPLES_PER_FILTER-th of the
+    record, and the one chosen between is too fast for the sampling."""
+    if span >= SAMPLES_PER_FILTER**2 * step * (1 - 1e-9):  # (the intervals' rounding)
+        return []
+    return [
+        f"the record is too short for C='auto': it spans {span / step:.3g} sampling intervals "
+        f"({step:.3g}), and a filter's time constant needs at least {SAMPLES_PER_FILTER:g} of "
+        f"them and at most a tenth of the record; the filter chosen is too fast for the "
+        "sampling, and its derivatives amplify the error of interpolating the samples: use "
+        f"a record of at least {SAMPLES_PER_FILTER**2:g} sampling intervals"
+    ]
+
+
 def _excitation(total: Moments, Theta: np.ndarray) -> float:
     """The reciprocal condition number of the instruments' moments (scaled to a unit
     diagonal), the one combination that vanishes identically left out."""
@@ -3075,8 +3093,10 @@ def _finish(Theta, records, shapes, k, coefficients, *, method, c, iterations, b
     nuisances = settings["offset"] or settings["initial_state"]
     said, idle = _input_warnings(shapes, settings["hold"], nuisances)
     found_ = list(notes) + said
-    if method == "ls" and not automatic:
-        found_ += _filter_warnings_at(c, _median_step(shapes))
+    if method == "ls":
+        step = _median_step(shapes)
+        found_ += (_auto_filter_warnings(step, min(shape.span for shape in shapes)) if automatic
+                   else _filter_warnings_at(c, step))  # fmt: skip
     minima = _fit_minima(coefficients, bounds, found)
     empty = tuple(np.zeros(0) for _ in shapes) if keep else ()
     count_ = len(UNKNOWNS)

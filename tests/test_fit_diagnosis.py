@@ -1,5 +1,5 @@
 """What `fit` and `estimate` say of records that cannot give a good estimate: data out of
-floating point's range."""
+floating point's range, records too short for the automatic filter."""
 
 from __future__ import annotations
 
@@ -62,3 +62,17 @@ def test_values_out_of_range_are_clear_errors(dc_drive, tmp_path, capsys):
     status = main(["fit", "models/dc_drive.bg", "--data", str(path), "--filter", "(1+s)^5"])
     err = capsys.readouterr().err
     assert status == 2 and "overflow floating point" in err and "SVD" not in err
+
+
+def test_the_automatic_filter_on_a_record_too_short_warns(dc_drive):
+    """Three samples: C='auto' cannot keep its time constant within 10 sampling intervals
+    and a tenth of the record; estimate gave 8.3e-6 for 10 without a word."""
+    t, u, y = prbs_record(dc_drive, 0.02, None)
+    run, texts = said(dc_drive, dc_drive.estimate, t, u, y, k0=5.0, C="auto")
+    assert abs(run.k - 10.0) > 5 and len(texts) == 1
+    assert texts[0].startswith("the record is too short for C='auto': it spans 2 sampling")
+    fitted, texts = said(dc_drive, dc_drive.fit, t, u, y, method="ls", offset=False,
+                         initial_state=False)  # fmt: skip
+    assert any(text.startswith("the record is too short for C='auto'") for text in texts)
+    t, u, y = prbs_record(dc_drive, 1.0, None)  # 100 intervals: the filter fits
+    assert said(dc_drive, dc_drive.estimate, t, u, y, k0=5.0, C="auto")[1] == []
