@@ -2998,14 +2998,16 @@ def _auto_filter_warnings(step: float, span: float) -> list[str]:
     ]
 
 
-def _excitation(total: Moments, Theta: np.ndarray) -> float:
+def _excitation(total: Moments, Theta: np.ndarray, k, clean: bool) -> float:
     """The reciprocal condition number of the instruments' moments (scaled to a unit
-    diagonal), the one combination that vanishes identically left out."""
+    diagonal), the combination theta(k) that vanishes left out: identically for the
+    instruments (k of their step), and for the regressors of noise-free data (`clean`) at
+    the least-squares estimate k, so that exact data are not taken for a poor input."""
     ZZ = total.XX if total.ZZ is None else total.ZZ
-    if total.k is None:
+    if total.k is None and not clean:
         Q = np.eye(ZZ.shape[0])
     else:
-        Q = linalg.null_space((Theta @ _K(total.k))[None, :])
+        Q = linalg.null_space((Theta @ _K(k if total.k is None else total.k))[None, :])
     M = Q.T @ ZZ @ Q
     scale = np.sqrt(np.abs(np.diag(M)))
     if not (scale > 0).all():
@@ -3175,7 +3177,9 @@ def _finish(Theta, records, shapes, k, coefficients, *, method, c, iterations, b
             "at the first sample does); if the record starts at rest and without offset, fit "
             "with offset=False, initial_state=False"
         )
-    if ok and not idle and _excitation(last_moments, Theta) < EXCITATION:
+    spread = math.sqrt(deviations / count)
+    clean = not math.sqrt(rss / count) > CLEAN * spread  # noise-free data (to their rounding)
+    if ok and not idle and _excitation(last_moments, Theta, k, clean) < EXCITATION:
         found_.append(
             "the input does not excite the system enough for this model: the moments of the "
             f"filtered signals are singular to 1 part in {1 / EXCITATION:.0e}; a richer input "
@@ -3222,11 +3226,9 @@ def _finish(Theta, records, shapes, k, coefficients, *, method, c, iterations, b
             "bounds fits better than the estimate (the criterion is nearly flat along some "
             "direction there): the estimate is the lowest minimum found"
         )
-    spread = math.sqrt(deviations / count)
     whiteness = sum(part.whiteness for part in parts)
     lags = WHITENESS_LAGS * len(parts)
-    noisy = math.sqrt(rss / count) > CLEAN * spread  # not noise-free data (its rounding)
-    if ok and noisy and whiteness > lags + WHITENESS_LEVEL * math.sqrt(2 * lags):
+    if ok and not clean and whiteness > lags + WHITENESS_LEVEL * math.sqrt(2 * lags):
         found_.append(
             f"the residuals are far from white (Ljung-Box Q = {whiteness:.3g} over {lags} lags, "
             f"about {lags} if white): the model, the hold, an offset or the noise is not as "

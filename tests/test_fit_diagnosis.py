@@ -1,5 +1,6 @@
 """What `fit` and `estimate` say of records that cannot give a good estimate: data out of
-floating point's range, records too short for the automatic filter."""
+floating point's range, records too short for the automatic filter, an input that
+excites too little."""
 
 from __future__ import annotations
 
@@ -76,3 +77,17 @@ def test_the_automatic_filter_on_a_record_too_short_warns(dc_drive):
     assert any(text.startswith("the record is too short for C='auto'") for text in texts)
     t, u, y = prbs_record(dc_drive, 1.0, None)  # 100 intervals: the filter fits
     assert said(dc_drive, dc_drive.estimate, t, u, y, k0=5.0, C="auto")[1] == []
+
+
+def test_an_input_that_excites_too_little_warns_and_exact_data_do_not(dc_drive):
+    t = np.arange(0.0, 200.0, 0.01)
+    u = np.sin(t)  # one frequency: the filtered input's moments are singular
+    y = dc_drive.simulate(t, u, 10.0)
+    for method in ("iv", "ls"):
+        fitted, texts = said(dc_drive, dc_drive.fit, t, u, dc_drive.with_noise(y, 30.0),
+                             method=method)  # fmt: skip
+        assert texts and texts[0].startswith("the input does not excite the system enough")
+    t, u, y = prbs_record(dc_drive, 100.0, None)
+    # noise-free, least squares: the regressors' moments are singular along theta(k) only
+    fitted, texts = said(dc_drive, dc_drive.fit, t, u, y, hold="zoh", method="ls")
+    assert fitted.k == pytest.approx(10.0, rel=1e-5) and texts == []
