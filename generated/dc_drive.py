@@ -2934,7 +2934,9 @@ def fit_records(records, *, method: str = "iv", C="auto", k0=None, bounds=None,
             c = _filter_for(Theta, k, interval, span)
             k, coefficients, total, found = _step(Theta, records, None, c, bounds, beta, settings)
         iterations = 0
+        others = [("k0", k0), ("the model file's value", _model_point())]
         if method == "iv":
+            others.append(("the least-squares estimate", k))
             extra = None if automatic else c
             k = k0 if k0 is not None else k
             previous = math.inf
@@ -2956,7 +2958,7 @@ def fit_records(records, *, method: str = "iv", C="auto", k0=None, bounds=None,
     return _finish(Theta, records, shapes, k, coefficients, method=method, c=c,
                    iterations=iterations, bounds=bounds, beta=beta, notes=notes,
                    automatic=automatic, settings=settings, last_moments=total, keep=keep,
-                   found=found)  # fmt: skip
+                   found=found, others=others)  # fmt: skip
 
 
 # The fit's verdict: its uncertainty, its fit and the warnings a user can act on ------------------
@@ -3080,6 +3082,44 @@ def _fit_minima(coefficients, bounds, found) -> np.ndarray:
     return minima[(minima >= bounds[0]) & (minima <= bounds[1])]
 
 
+def _elsewhere(records, Theta, settings, k, k_se, bounds, rss, variance, others,
+               minima) -> list[str]:  # fmt: skip
+    """Points the fit did not end at (k0, the model file's values, the least-squares start
+    of the instrumental-variable steps), within the bounds, outside the 95 % interval and
+    away from the criterion's other minima (warned about on their own), that fit the data
+    better than the estimate, or nearly as well (within MARGIN noise variances) although
+    more than twice the interval's half-width away: then the record determines k far less
+    than k_se, a figure from the neighbourhood of the estimate, says (a short record whose
+    offset and initial state absorb the slow dynamics)."""
+    said, seen = [], []
+    box = np.reshape(bounds, (-1, 2))
+    se = np.reshape(k_se, -1)
+    for label, point in others:
+        if point is None:
+            continue
+        point = np.reshape(np.asarray(point, dtype=float), -1)
+        if (not np.all(np.isfinite(point)) or any(np.array_equal(point, p) for p in seen)
+                or np.any(point < box[:, 0]) or np.any(point > box[:, 1])):  # fmt: skip
+            continue
+        seen.append(point)
+        away = float(np.max(np.abs(point - np.reshape(k, -1)) / se))
+        near = [np.max(np.abs(point - m) / se) <= Z95 for m in np.reshape(minima, (-1, se.size))]
+        if not away > Z95 or any(near):
+            continue
+        extra = records.residual_sum(Theta, float(point[0]) if SCALAR else point, settings) - rss
+        if not (extra < 0 or (away > 2 * Z95 and extra < MARGIN * variance)):
+            continue
+        differs = f" by {extra / variance:+.3g} noise variances" if variance > 0 else ""
+        said.append(
+            f"{label}, {_named_point(float(point[0]) if SCALAR else point)}, fits the data "
+            f"{'better' if extra < 0 else 'nearly as well'} (the residual sums of squares "
+            f"differ{differs}) though it lies {away:.3g} standard errors from the estimate: "
+            "the record determines k far less than k_se says; use a longer or richer record "
+            "(or offset=False, initial_state=False if it starts at rest), or bounds"
+        )
+    return said
+
+
 def _criterion_curvature(coefficients: np.ndarray, k) -> np.ndarray:
     """The criterion's Hessian at k (unknowns x unknowns)."""
     if SCALAR:
@@ -3090,7 +3130,7 @@ def _criterion_curvature(coefficients: np.ndarray, k) -> np.ndarray:
 
 
 def _finish(Theta, records, shapes, k, coefficients, *, method, c, iterations, bounds, beta,
-            notes, automatic, settings, last_moments, keep, found=None) -> Fit:  # fmt: skip
+            notes, automatic, settings, last_moments, keep, found=None, others=()) -> Fit:  # fmt: skip
     """The Fit: validation at k, uncertainty, warnings (issued as EstimationWarning)."""
     nuisances = settings["offset"] or settings["initial_state"]
     said, idle = _input_warnings(shapes, settings["hold"], nuisances)
@@ -3203,6 +3243,9 @@ def _finish(Theta, records, shapes, k, coefficients, *, method, c, iterations, b
                     f"differs from the estimate's by {extra / variance:+.3g} noise variances): the "
                     "data cannot tell them apart; narrow the bounds or use a richer input"
                 )
+    if ok and not clean:  # (on exact data k_se measures rounding and interpolation alone)
+        found_ += _elsewhere(records, Theta, settings, k, k_se, bounds, rss, variance, others,
+                             minima)  # fmt: skip
     if dof < 10:
         found_.append(
             f"only {count} samples for k and {count - dof - count_} nuisance parameter(s): the "

@@ -1,10 +1,12 @@
 """What `fit` and `estimate` say of records that cannot give a good estimate: data out of
-floating point's range, records too short for the automatic filter, an input that
-excites too little."""
+floating point's range, records too short for the automatic filter, an input that excites
+too little, a record whose estimate a point far outside its interval fits better, and two
+values of one unknown that the data cannot tell apart."""
 
 from __future__ import annotations
 
 import warnings
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -91,3 +93,57 @@ def test_an_input_that_excites_too_little_warns_and_exact_data_do_not(dc_drive):
     # noise-free, least squares: the regressors' moments are singular along theta(k) only
     fitted, texts = said(dc_drive, dc_drive.fit, t, u, y, hold="zoh", method="ls")
     assert fitted.k == pytest.approx(10.0, rel=1e-5) and texts == []
+
+
+def test_a_short_noisy_record_is_not_presented_as_a_precise_estimate(dc_drive):
+    """3 s of a DC drive whose slow time constant is 11 s, at 10 dB: the offset and initial
+    state absorb the slow dynamics and the steps end near k = 0 with a tiny k_se (it was
+    reported without a warning); the model file's k = 10 fits better, and the fit says so."""
+    t, u, y = prbs_record(dc_drive, 3.0, 10.0)
+    fitted, texts = said(dc_drive, dc_drive.fit, t, u, y, hold="zoh")
+    assert fitted.ok and abs(fitted.k) < 0.01 and fitted.k_se < 1e-3
+    assert texts == [text for text in texts if "the model file's value, k = 10, fits the data "
+                     "better" in text]  # fmt: skip
+    assert len(texts) == 1 and "standard errors from the estimate" in texts[0]
+    t, u, y = prbs_record(dc_drive, 5.0, 10.0, seed=2)
+    fitted, texts = said(dc_drive, dc_drive.fit, t, u, y, hold="zoh")
+    assert texts[0].startswith("k is poorly determined by these data: k_se = 0.627 is 26.8 %")
+    t, u, y = prbs_record(dc_drive, 100.0, 10.0, period=1.0)  # a long record: nothing to say
+    fitted, texts = said(dc_drive, dc_drive.fit, t, u, y, hold="zoh")
+    assert texts == [] and fitted.k == pytest.approx(10.0, abs=3 * fitted.k_se)
+
+
+GYRATOR = """\
+model gyro "an RC load seen through an unknown gyrator"
+
+unknown k = 2 "gyrator modulus"
+param r = 3 "load resistance [ohm]"
+param c = 0.5 "load capacitance [F]"
+
+Se:v -> 1:a
+1:a -> GY:k -> 0:b
+0:b -> R:r
+0:b -> C:c
+1:a -> Df:i
+"""
+
+
+def test_two_values_of_one_unknown_the_data_cannot_tell_apart(tmp_path):
+    """Through a gyrator, k and -k give the same transfer function 6 / (k^2 (3 s + 2)):
+    both minima are found, and the fit says the data cannot choose; bounds can."""
+    import mtt
+
+    path = tmp_path / "gyro.bg"
+    path.write_text(GYRATOR)
+    module = mtt.load(Path(path)).estimator()
+    t = np.linspace(0.0, 20.0, 2001)
+    u = module.input_signal("prbs", t, period=0.5)
+    y = module.with_noise(module.simulate(t, u, 2.0, hold="zoh"), 20.0, seed=1)
+    fitted, texts = said(module, module.fit, t, u, y, hold="zoh")
+    assert fitted.minima == pytest.approx([-abs(fitted.k), abs(fitted.k)])
+    assert abs(fitted.k) == pytest.approx(2.0, abs=3 * fitted.k_se)
+    assert len(texts) == 1 and texts[0].startswith(
+        f"another local minimum, k = {-fitted.k:.6g}, fits the data nearly as well"
+    )
+    fitted, texts = said(module, module.fit, t, u, y, hold="zoh", bounds=(0.5, 5.0))
+    assert fitted.k > 0 and texts == []
