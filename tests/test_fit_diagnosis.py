@@ -147,3 +147,13 @@ def test_two_values_of_one_unknown_the_data_cannot_tell_apart(tmp_path):
     )
     fitted, texts = said(module, module.fit, t, u, y, hold="zoh", bounds=(0.5, 5.0))
     assert fitted.k > 0 and texts == []
+
+
+def test_the_command_line_says_when_no_minimum_lies_within_the_bounds(capsys):
+    args = ["fit", "models/dc_drive.bg", "--signal", "prbs", "--period", "1", "--t-end", "100",
+            "--dt", "0.02", "--hold", "zoh", "--noise-snr", "20", "--bounds", "0:9"]  # fmt: skip
+    status = main(args)
+    out, err = capsys.readouterr()
+    assert status == 0 and "  k = 9 ± " in out
+    assert "local minima of the criterion: none within the bounds" in out
+    assert "mtt fit: warning: k = 9 is at the upper bound" in err

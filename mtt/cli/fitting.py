@@ -122,6 +122,7 @@ def _text(module, records, result) -> str:
         minima = ", ".join(f"{value:.6g}" for value in result.minima)
     else:
         minima = "; ".join(f"({unknowns.text(module, point, '.6g')})" for point in result.minima)
+    minima = minima or "none within the bounds"
     lines += [
         f"  fit {result.fit_percent:.4g} %, residual RMS {result.residual_rms:.3g}, "
         f"noise std {result.noise_std:.3g}",
