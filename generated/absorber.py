@@ -3245,6 +3245,12 @@ def _finish(Theta, records, shapes, k, coefficients, *, method, c, iterations, b
     if ok and not clean:  # (on exact data k_se measures rounding and interpolation alone)
         found_ += _elsewhere(records, Theta, settings, k, k_se, bounds, rss, variance, others,
                              minima)  # fmt: skip
+    if not deviations > 0:
+        found_.append(
+            "the output is constant: nothing in it responds to the input, so the estimate "
+            "means little and fit_percent (relative to the output's variation) is undefined "
+            "(NaN); check the output's column and the experiment"
+        )
     if dof < 10:
         found_.append(
             f"only {count} samples for k and {count - dof - count_} nuisance parameter(s): the "

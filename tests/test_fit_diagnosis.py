@@ -157,3 +157,20 @@ def test_the_command_line_says_when_no_minimum_lies_within_the_bounds(capsys):
     assert status == 0 and "  k = 9 ± " in out
     assert "local minima of the criterion: none within the bounds" in out
     assert "mtt fit: warning: k = 9 is at the upper bound" in err
+
+
+def test_a_constant_output_is_a_warning_not_a_silent_nan(dc_drive):
+    """The input varies, the output does not (a wrong column, a sensor off): fit_percent is
+    NaN, and the fit says why."""
+    t = np.arange(0.0, 100.0, 0.02)
+    u = dc_drive.input_signal("prbs", t, period=1.0)
+    for method in ("iv", "ls"):
+        fitted, texts = said(dc_drive, dc_drive.fit, t, u, np.ones_like(t), hold="zoh",
+                             method=method)  # fmt: skip
+        assert np.isnan(fitted.fit_percent)
+        assert any(
+            text.startswith("the output is constant: nothing in it responds") for text in texts
+        )
+    t, u, y = prbs_record(dc_drive, 100.0, 20.0, period=1.0)
+    fitted, texts = said(dc_drive, dc_drive.fit, t, u, y, hold="zoh")
+    assert 85 < fitted.fit_percent < 95 and texts == []
