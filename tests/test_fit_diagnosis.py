@@ -13,6 +13,9 @@ import pytest
 
 from mtt.cli.main import main
 
+ROOT = Path(__file__).resolve().parent.parent
+DC_DRIVE = str(ROOT / "models" / "dc_drive.bg")
+
 
 def said(module, function, *args, **options) -> tuple[object, list[str]]:
     """The result and the EstimationWarnings issued (which the result lists, in order)."""
@@ -62,7 +65,7 @@ def test_values_out_of_range_are_clear_errors(dc_drive, tmp_path, capsys):
     path = tmp_path / "scaled.csv"
     rows = zip((t * 1e-200).tolist(), u.tolist(), y.tolist(), strict=True)
     path.write_text("t,u,y\n" + "".join(f"{a!r},{b!r},{c!r}\n" for a, b, c in rows))
-    status = main(["fit", "models/dc_drive.bg", "--data", str(path), "--filter", "(1+s)^5"])
+    status = main(["fit", DC_DRIVE, "--data", str(path), "--filter", "(1+s)^5"])
     err = capsys.readouterr().err
     assert status == 2 and "overflow floating point" in err and "SVD" not in err
 
@@ -150,7 +153,7 @@ def test_two_values_of_one_unknown_the_data_cannot_tell_apart(tmp_path):
 
 
 def test_the_command_line_says_when_no_minimum_lies_within_the_bounds(capsys):
-    args = ["fit", "models/dc_drive.bg", "--signal", "prbs", "--period", "1", "--t-end", "100",
+    args = ["fit", DC_DRIVE, "--signal", "prbs", "--period", "1", "--t-end", "100",
             "--dt", "0.02", "--hold", "zoh", "--noise-snr", "20", "--bounds", "0:9"]  # fmt: skip
     status = main(args)
     out, err = capsys.readouterr()
@@ -174,3 +177,23 @@ def test_a_constant_output_is_a_warning_not_a_silent_nan(dc_drive):
     t, u, y = prbs_record(dc_drive, 100.0, 20.0, period=1.0)
     fitted, texts = said(dc_drive, dc_drive.fit, t, u, y, hold="zoh")
     assert 85 < fitted.fit_percent < 95 and texts == []
+
+
+def test_errors_in_one_of_several_files_name_the_file(tmp_path, monkeypatch, capsys):
+    monkeypatch.chdir(tmp_path)
+    good = "t,u,y\n" + "".join(f"{i / 100},{(-1) ** (i // 50)},{i / 1000}\n" for i in range(500))
+    Path("good.csv").write_text(good)
+    Path("late.csv").write_text("t,u,y\n0,1,0\n\n0.02,1,0\n0.01,1,0\n0.03,1,0\n")
+    Path("short.csv").write_text("t,u,y\n0,1,0\n0.01,1,0\n0.02,1,0\n")
+    for data, message in [
+        ("late.csv", "late.csv: the times (column 't') must increase strictly: 0.01 (data row 3) "
+         "follows 0.02 (data row 2)"),
+        ("short.csv", "record 1 (short.csv) has 3 samples: too few to determine k"),
+    ]:  # fmt: skip
+        status = main(["fit", DC_DRIVE, "--data", "good.csv",
+                       "--data", data])  # fmt: skip
+        err = capsys.readouterr().err
+        assert status == 2 and f"mtt fit: error: {message}" in err
+    status = main(["estimate", DC_DRIVE, "--data", "late.csv",
+                   "--k0", "1"])  # fmt: skip
+    assert status == 2 and "late.csv: the times (column 't') must" in capsys.readouterr().err
