@@ -3082,15 +3082,16 @@ def _fit_minima(coefficients, bounds, found) -> np.ndarray:
     return minima[(minima >= bounds[0]) & (minima <= bounds[1])]
 
 
-def _elsewhere(records, Theta, settings, k, k_se, bounds, rss, variance, others,
-               minima) -> list[str]:  # fmt: skip
+def _elsewhere(records, Theta, settings, k, k_se, bounds, rss, variance, others, minima,
+               method) -> list[str]:  # fmt: skip
     """Points the fit did not end at (k0, the model file's values, the least-squares start
     of the instrumental-variable steps), within the bounds, outside the 95 % interval and
     away from the criterion's other minima (warned about on their own), that fit the data
     better than the estimate, or nearly as well (within MARGIN noise variances) although
     more than twice the interval's half-width away: then the record determines k far less
     than k_se, a figure from the neighbourhood of the estimate, says (a short record whose
-    offset and initial state absorb the slow dynamics)."""
+    offset and initial state absorb the slow dynamics), or, for least squares, its bias
+    under output noise shows."""
     said, seen = [], []
     box = np.reshape(bounds, (-1, 2))
     se = np.reshape(k_se, -1)
@@ -3114,7 +3115,9 @@ def _elsewhere(records, Theta, settings, k, k_se, bounds, rss, variance, others,
             f"{label}, {_named_point(float(point[0]) if SCALAR else point)}, fits the data "
             f"{'better' if extra < 0 else 'nearly as well'} (the residual sums of squares "
             f"differ{differs}) though it lies {away:.3g} standard errors from the estimate: "
-            "the record determines k far less than k_se says; use a longer or richer record "
+            + ("least squares is biased by output noise (method='iv', the default, is not), "
+               "or " if method == "ls" else "")
+            + "the record determines k far less than k_se says; use a longer or richer record "
             "(or offset=False, initial_state=False if it starts at rest), or bounds"
         )
     return said
@@ -3245,7 +3248,7 @@ def _finish(Theta, records, shapes, k, coefficients, *, method, c, iterations, b
                 )
     if ok and not clean:  # (on exact data k_se measures rounding and interpolation alone)
         found_ += _elsewhere(records, Theta, settings, k, k_se, bounds, rss, variance, others,
-                             minima)  # fmt: skip
+                             minima, method)  # fmt: skip
     if not deviations > 0:
         found_.append(
             "the output is constant: nothing in it responds to the input, so the estimate "

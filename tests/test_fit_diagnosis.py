@@ -107,7 +107,11 @@ def test_a_short_noisy_record_is_not_presented_as_a_precise_estimate(dc_drive):
     assert fitted.ok and abs(fitted.k) < 0.01 and fitted.k_se < 1e-3
     assert texts == [text for text in texts if "the model file's value, k = 10, fits the data "
                      "better" in text]  # fmt: skip
-    assert len(texts) == 1 and "standard errors from the estimate" in texts[0]
+    assert (
+        len(texts) == 1 and "standard errors from the estimate: the record determines" in texts[0]
+    )
+    fitted, texts = said(dc_drive, dc_drive.fit, t, u, y, hold="zoh", method="ls")
+    assert any("estimate: least squares is biased by output noise (method='iv'" in w for w in texts)
     t, u, y = prbs_record(dc_drive, 5.0, 10.0, seed=2)
     fitted, texts = said(dc_drive, dc_drive.fit, t, u, y, hold="zoh")
     assert texts[0].startswith("k is poorly determined by these data: k_se = 0.627 is 26.8 %")
