@@ -127,7 +127,8 @@ def monte_carlo(module, experiment: Experiment, snr_db: float, seeds: int, refer
             start = time.process_time()
             oe.append(output_error(experiment, t, u, y))
             times["oe"].append(time.process_time() - start)
-    return {m: np.array(v) for m, v in rows.items()}, times, np.reshape(oe, (len(oe), -1))
+    oe = np.reshape(oe, (len(oe), -1)) if oe else np.zeros((0, np.size(experiment.k)))
+    return {m: np.array(v) for m, v in rows.items()}, times, oe
 
 
 def table(rows: list[list[str]]) -> str:

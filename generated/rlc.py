@@ -2052,7 +2052,10 @@ def estimate(
     Theta = theta(**known)
     automatic = isinstance(C, str) and C.strip() == "auto"
     c = _auto_filter(Theta, k0, [(t, u, y)]) if automatic else filter_polynomial(C)
-    found = [] if automatic else _filter_warnings(c, np.diff(t))
+    if automatic:
+        found = _auto_filter_warnings(float(np.median(np.diff(t))), float(t[-1] - t[0]))
+    else:
+        found = _filter_warnings(c, np.diff(t))
     informed = None
     if engine == "ode":
         times, khat, J, stop = _integrate(
@@ -2420,6 +2423,23 @@ def _prefilter(Theta: np.ndarray, k: float, C) -> np.ndarray:
     return f if C is None else np.convolve(f, C / C[0])
 
 
+def _overflow(t: np.ndarray, c: np.ndarray) -> str:
+    """Why a record's moments left floating point's range: its time scale against the filter's."""
+    with np.errstate(all="ignore"):
+        sizes = np.abs(np.roots(c))
+    constants = 1.0 / sizes[np.isfinite(sizes) & (sizes > 0)]
+    which = (
+        f"the filter's time constants are {constants.min():.3g} to {constants.max():.3g}"
+        if constants.size
+        else "the filter has no finite time constant"
+    )
+    return (
+        f"the moments of the filtered signals overflow floating point: the record spans "
+        f"{float(t[-1] - t[0]):.3g} time units with samples {float(np.median(np.diff(t))):.3g} "
+        f"apart, and {which}: are the times in the model's unit (seconds)?"
+    )
+
+
 def _record_moments(Theta, t, u, y, *, k, c, hold, offset, initial_state, beta, known) -> Moments:
     """`moments` for checked arrays and a resolved filter: c is C(s) for least squares
     (k None), else the extra factor of the prefilter (None for none)."""
@@ -2433,6 +2453,8 @@ def _record_moments(Theta, t, u, y, *, k, c, hold, offset, initial_state, beta, 
         signals.append(np.ones_like(t))
         holds, needs = holds + ("zoh",), needs + (last,)
     M = _filtered_moments(c, t, np.array(signals), holds, needs, beta)
+    if not np.isfinite(M).all():
+        raise ValueError(_overflow(t, c))
     if last >= first:  # drop s^i 1/F for i < first (no offset), then project the rest out
         start = M.shape[0] - last - 1  # where the unit step's derivatives begin
         keep = np.r_[np.arange(start), start + np.arange(first, last + 1)]
@@ -2715,15 +2737,33 @@ def _records(t, u, y) -> list[tuple[np.ndarray, np.ndarray, np.ndarray]]:
     """One record (arrays t, u, y) or several (lists of arrays), each checked."""
     several = isinstance(t, list | tuple) and len(t) > 0 and np.ndim(t[0]) > 0
     if not several:
-        return [tuple(_signals(("t", t), ("u", u), ("y", y), minimum=2))]
+        return [_in_range(_signals(("t", t), ("u", u), ("y", y), minimum=2), "")]
     lists = [("t", t), ("u", u), ("y", y)]
     for name, value in lists:
         if not isinstance(value, list | tuple) or len(value) != len(t):
             raise ValueError(f"{name} must be a list of {len(t)} arrays, one per record, like t")
     return [
-        tuple(_signals(*((f"{name}[{i}]", value[i]) for name, value in lists), minimum=2))
+        _in_range(_signals(*((f"{name}[{i}]", value[i]) for name, value in lists), minimum=2),
+                  f"[{i}]")  # fmt: skip
         for i in range(len(t))
     ]
+
+
+SIZE_LIMIT = 1e100  # |u| or |y| beyond it, or non-zero and all below its reciprocal: refused
+
+
+def _in_range(arrays, index: str) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The record, if the sums of products of its signals (the fit's moments, the residual
+    sums) stay within floating point's range; else a ValueError naming the signal."""
+    for name, w in zip(("u", "y"), arrays[1:], strict=True):
+        peak = float(np.abs(w).max())
+        if peak > SIZE_LIMIT or 0 < peak < 1 / SIZE_LIMIT:
+            raise ValueError(
+                f"{name}{index} reaches at most {peak:.3g} in magnitude: the fit's sums of "
+                f"products of the signals would {'overflow' if peak > 1 else 'underflow'} "
+                "floating point; give it in a unit that brings its values nearer 1"
+            )
+    return tuple(arrays)
 
 
 def _auto_filter(Theta: np.ndarray, k, records) -> np.ndarray:
@@ -2919,7 +2959,9 @@ def fit_records(records, *, method: str = "iv", C="auto", k0=None, bounds=None,
             c = _filter_for(Theta, k, interval, span)
             k, coefficients, total, found = _step(Theta, records, None, c, bounds, beta, settings)
         iterations = 0
+        others = [("k0", k0), ("the model file's value", _model_point())]
         if method == "iv":
+            others.append(("the least-squares estimate", k))
             extra = None if automatic else c
             k = k0 if k0 is not None else k
             previous = math.inf
@@ -2941,7 +2983,7 @@ def fit_records(records, *, method: str = "iv", C="auto", k0=None, bounds=None,
     return _finish(Theta, records, shapes, k, coefficients, method=method, c=c,
                    iterations=iterations, bounds=bounds, beta=beta, notes=notes,
                    automatic=automatic, settings=settings, last_moments=total, keep=keep,
-                   found=found)  # fmt: skip
+                   found=found, others=others)  # fmt: skip
 
 
 # The fit's verdict: its uncertainty, its fit and the warnings a user can act on ------------------
@@ -2974,14 +3016,31 @@ def _filter_warnings_at(c: np.ndarray, step: float) -> list[str]:
     ]
 
 
-def _excitation(total: Moments, Theta: np.ndarray) -> float:
+def _auto_filter_warnings(step: float, span: float) -> list[str]:
+    """C='auto' on a record under SAMPLES_PER_FILTER^2 sampling intervals long: no time
+    constant is both SAMPLES_PER_FILTER intervals and a SAMPLES_PER_FILTER-th of the
+    record, and the one chosen between is too fast for the sampling."""
+    if span >= SAMPLES_PER_FILTER**2 * step * (1 - 1e-9):  # (the intervals' rounding)
+        return []
+    return [
+        f"the record is too short for C='auto': it spans {span / step:.3g} sampling intervals "
+        f"({step:.3g}), and a filter's time constant needs at least {SAMPLES_PER_FILTER:g} of "
+        f"them and at most a tenth of the record; the filter chosen is too fast for the "
+        "sampling, and its derivatives amplify the error of interpolating the samples: use "
+        f"a record of at least {SAMPLES_PER_FILTER**2:g} sampling intervals"
+    ]
+
+
+def _excitation(total: Moments, Theta: np.ndarray, k, clean: bool) -> float:
     """The reciprocal condition number of the instruments' moments (scaled to a unit
-    diagonal), the one combination that vanishes identically left out."""
+    diagonal), the combination theta(k) that vanishes left out: identically for the
+    instruments (k of their step), and for the regressors of noise-free data (`clean`) at
+    the least-squares estimate k, so that exact data are not taken for a poor input."""
     ZZ = total.XX if total.ZZ is None else total.ZZ
-    if total.k is None:
+    if total.k is None and not clean:
         Q = np.eye(ZZ.shape[0])
     else:
-        Q = linalg.null_space((Theta @ _K(total.k))[None, :])
+        Q = linalg.null_space((Theta @ _K(k if total.k is None else total.k))[None, :])
     M = Q.T @ ZZ @ Q
     scale = np.sqrt(np.abs(np.diag(M)))
     if not (scale > 0).all():
@@ -3048,6 +3107,47 @@ def _fit_minima(coefficients, bounds, found) -> np.ndarray:
     return minima[(minima >= bounds[0]) & (minima <= bounds[1])]
 
 
+def _elsewhere(records, Theta, settings, k, k_se, bounds, rss, variance, others, minima,
+               method) -> list[str]:  # fmt: skip
+    """Points the fit did not end at (k0, the model file's values, the least-squares start
+    of the instrumental-variable steps), within the bounds, outside the 95 % interval and
+    away from the criterion's other minima (warned about on their own), that fit the data
+    better than the estimate, or nearly as well (within MARGIN noise variances) although
+    more than twice the interval's half-width away: then the record determines k far less
+    than k_se, a figure from the neighbourhood of the estimate, says (a short record whose
+    offset and initial state absorb the slow dynamics), or, for least squares, its bias
+    under output noise shows."""
+    said, seen = [], []
+    box = np.reshape(bounds, (-1, 2))
+    se = np.reshape(k_se, -1)
+    for label, point in others:
+        if point is None:
+            continue
+        point = np.reshape(np.asarray(point, dtype=float), -1)
+        if (not np.all(np.isfinite(point)) or any(np.array_equal(point, p) for p in seen)
+                or np.any(point < box[:, 0]) or np.any(point > box[:, 1])):  # fmt: skip
+            continue
+        seen.append(point)
+        away = float(np.max(np.abs(point - np.reshape(k, -1)) / se))
+        near = [np.max(np.abs(point - m) / se) <= Z95 for m in np.reshape(minima, (-1, se.size))]
+        if not away > Z95 or any(near):
+            continue
+        extra = records.residual_sum(Theta, float(point[0]) if SCALAR else point, settings) - rss
+        if not (extra < 0 or (away > 2 * Z95 and extra < MARGIN * variance)):
+            continue
+        differs = f" by {extra / variance:+.3g} noise variances" if variance > 0 else ""
+        said.append(
+            f"{label}, {_named_point(float(point[0]) if SCALAR else point)}, fits the data "
+            f"{'better' if extra < 0 else 'nearly as well'} (the residual sums of squares "
+            f"differ{differs}) though it lies {away:.3g} standard errors from the estimate: "
+            + ("least squares is biased by output noise (method='iv', the default, is not), "
+               "or " if method == "ls" else "")
+            + "the record determines k far less than k_se says; use a longer or richer record "
+            "(or offset=False, initial_state=False if it starts at rest), or bounds"
+        )
+    return said
+
+
 def _criterion_curvature(coefficients: np.ndarray, k) -> np.ndarray:
     """The criterion's Hessian at k (unknowns x unknowns)."""
     if SCALAR:
@@ -3058,13 +3158,15 @@ def _criterion_curvature(coefficients: np.ndarray, k) -> np.ndarray:
 
 
 def _finish(Theta, records, shapes, k, coefficients, *, method, c, iterations, bounds, beta,
-            notes, automatic, settings, last_moments, keep, found=None) -> Fit:  # fmt: skip
+            notes, automatic, settings, last_moments, keep, found=None, others=()) -> Fit:  # fmt: skip
     """The Fit: validation at k, uncertainty, warnings (issued as EstimationWarning)."""
     nuisances = settings["offset"] or settings["initial_state"]
     said, idle = _input_warnings(shapes, settings["hold"], nuisances)
     found_ = list(notes) + said
-    if method == "ls" and not automatic:
-        found_ += _filter_warnings_at(c, _median_step(shapes))
+    if method == "ls":
+        step = _median_step(shapes)
+        found_ += (_auto_filter_warnings(step, min(shape.span for shape in shapes)) if automatic
+                   else _filter_warnings_at(c, step))  # fmt: skip
     minima = _fit_minima(coefficients, bounds, found)
     empty = tuple(np.zeros(0) for _ in shapes) if keep else ()
     count_ = len(UNKNOWNS)
@@ -3149,7 +3251,9 @@ def _finish(Theta, records, shapes, k, coefficients, *, method, c, iterations, b
             "at the first sample does); if the record starts at rest and without offset, fit "
             "with offset=False, initial_state=False"
         )
-    if ok and not idle and _excitation(last_moments, Theta) < EXCITATION:
+    spread = math.sqrt(deviations / count)
+    clean = not math.sqrt(rss / count) > CLEAN * spread  # noise-free data (to their rounding)
+    if ok and not idle and _excitation(last_moments, Theta, k, clean) < EXCITATION:
         found_.append(
             "the input does not excite the system enough for this model: the moments of the "
             f"filtered signals are singular to 1 part in {1 / EXCITATION:.0e}; a richer input "
@@ -3167,6 +3271,15 @@ def _finish(Theta, records, shapes, k, coefficients, *, method, c, iterations, b
                     f"differs from the estimate's by {extra / variance:+.3g} noise variances): the "
                     "data cannot tell them apart; narrow the bounds or use a richer input"
                 )
+    if ok and not clean:  # (on exact data k_se measures rounding and interpolation alone)
+        found_ += _elsewhere(records, Theta, settings, k, k_se, bounds, rss, variance, others,
+                             minima, method)  # fmt: skip
+    if not deviations > 0:
+        found_.append(
+            "the output is constant: nothing in it responds to the input, so the estimate "
+            "means little and fit_percent (relative to the output's variation) is undefined "
+            "(NaN); check the output's column and the experiment"
+        )
     if dof < 10:
         found_.append(
             f"only {count} samples for k and {count - dof - count_} nuisance parameter(s): the "
@@ -3196,11 +3309,9 @@ def _finish(Theta, records, shapes, k, coefficients, *, method, c, iterations, b
             "bounds fits better than the estimate (the criterion is nearly flat along some "
             "direction there): the estimate is the lowest minimum found"
         )
-    spread = math.sqrt(deviations / count)
     whiteness = sum(part.whiteness for part in parts)
     lags = WHITENESS_LAGS * len(parts)
-    noisy = math.sqrt(rss / count) > CLEAN * spread  # not noise-free data (its rounding)
-    if ok and noisy and whiteness > lags + WHITENESS_LEVEL * math.sqrt(2 * lags):
+    if ok and not clean and whiteness > lags + WHITENESS_LEVEL * math.sqrt(2 * lags):
         found_.append(
             f"the residuals are far from white (Ljung-Box Q = {whiteness:.3g} over {lags} lags, "
             f"about {lags} if white): the model, the hold, an offset or the noise is not as "

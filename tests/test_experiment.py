@@ -193,7 +193,10 @@ def test_a_stopped_run_is_reported_with_exit_status_1(capsys):
         (["--k0", "1", "--data", "missing.csv"], "missing.csv: No such file or directory"),
         (["--k0", "1", "--signal", "bad.csv"], "bad.csv:1: no column 'u' (the header names t, v)"),
         (["--k0", "1", "--data", "nan.csv"], "nan.csv:3: column 'y' holds 'nan', not a number"),
-        (["--k0", "1", "--data", "back.csv"], "t must be strictly increasing"),
+        (
+            ["--k0", "1", "--data", "back.csv"],
+            "back.csv: the times (column 't') must increase strictly: 1.0 (data row 3) follows",
+        ),
         (["--k0", "1", "--data", "text.csv"], "text.csv:3: column 'u' holds 'one', not a number"),
         (["--k0", "1", "--set", "zz=1"], "error[undeclared_parameter]"),
         ([], "the following arguments are required: --k0"),

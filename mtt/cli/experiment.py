@@ -102,6 +102,14 @@ def experiment_data(module: ModuleType, args, several: bool = False) -> list[Dat
         records = []
         for path in args.data:
             t, u, y = module.read_csv(path, columns)
+            late = np.flatnonzero(np.diff(t) <= 0)
+            if late.size:  # named here: the module's message cannot name the file
+                i = int(late[0])
+                later, earlier = float(t[i + 1]), float(t[i])
+                raise UsageError(
+                    f"{path}: the times (column {columns[0]!r}) must increase strictly: "
+                    f"{later!r} (data row {i + 2}) follows {earlier!r} (data row {i + 1})"
+                )
             records.append(Data(t, u, y, None, None, f"{t.size} samples from {path}"))
         return records
     if getattr(args, "columns", None):

@@ -8,6 +8,7 @@ the result (text or JSON), the warnings on stderr, and draws the compare plot.
 from __future__ import annotations
 
 import json
+import re
 
 import numpy as np
 
@@ -55,7 +56,12 @@ def cmd_fit(args) -> int:
     arrays = [[getattr(data, name) for data in records] for name in ("t", "u", "y")]
     if len(records) == 1:
         arrays = [part[0] for part in arrays]
-    result = module.fit(*arrays, **options(module, args))
+    try:
+        result = module.fit(*arrays, **options(module, args))
+    except ValueError as error:  # "record 1 has 3 samples": name the file
+        if len(records) == 1:
+            raise
+        raise UsageError(_files_named(str(error), records)) from None
     warn("fit", result.warnings)
     if args.plot and result.ok:
         from mtt.cli import plots  # matplotlib takes a quarter second to import: only plotting pays
@@ -86,6 +92,20 @@ def cmd_fit(args) -> int:
     else:
         print(_text(module, records, result))
     return EXIT_OK if result.ok else EXIT_STOPPED
+
+
+def _files_named(message: str, records) -> str:
+    """The module's "record i" (from 0, in the order of --data) followed by its file."""
+    sources = [data.note.split(" samples from ", 1)[-1] for data in records]
+    return re.sub(
+        r"\brecord (\d+)\b",
+        lambda match: (
+            f"{match.group(0)} ({sources[int(match.group(1))]})"
+            if int(match.group(1)) < len(sources)
+            else match.group(0)
+        ),
+        message,
+    )
 
 
 def _estimates(module, result) -> str:
@@ -122,6 +142,7 @@ def _text(module, records, result) -> str:
         minima = ", ".join(f"{value:.6g}" for value in result.minima)
     else:
         minima = "; ".join(f"({unknowns.text(module, point, '.6g')})" for point in result.minima)
+    minima = minima or "none within the bounds"
     lines += [
         f"  fit {result.fit_percent:.4g} %, residual RMS {result.residual_rms:.3g}, "
         f"noise std {result.noise_std:.3g}",
