@@ -9,6 +9,8 @@ from functools import cached_property
 from pathlib import Path
 from types import MappingProxyType, ModuleType
 
+import numpy as np
+
 from mtt.api.results import Causality, StateSpace, Theta, TransferFunction, exact
 from mtt.derivation import pipeline
 from mtt.derivation import theta as derived
@@ -252,14 +254,26 @@ class Model:
         return control.tf(*self._coefficients(k, known))
 
     def _coefficients(self, k: object, known: dict):
+        """k as the generated modules take it: a number (one unknown), a sequence or array
+        in the order of `unknowns` (fit(...).k), or a dict by name."""
         values = dict(known)
         if k is not None:
-            if len(self.unknowns) != 1:
-                raise MttError(
-                    f"{self.name} has {len(self.unknowns)} unknowns: give each by name",
-                    kind="bad_argument",
-                )
-            values[self.unknowns[0]] = k
+            if isinstance(k, Mapping):
+                given = dict(k)
+            else:
+                array = np.array([k] if isinstance(k, str) else k, dtype=object)
+                if array.ndim > 1 or array.size != len(self.unknowns):
+                    raise MttError(
+                        f"k = {k!r}: {self.name} has {len(self.unknowns)} unknown(s) "
+                        f"({', '.join(self.unknowns)}): give a value for each, in this "
+                        "order, or a dict by name",
+                        kind="bad_argument",
+                    )
+                given = dict(zip(self.unknowns, array.ravel().tolist(), strict=True))
+            for name in given:
+                if name in values:
+                    raise MttError(f"{name} is given twice: in k and by name", kind="bad_argument")
+            values.update(given)
         return self.transfer_function.at(**values)
 
     def compile(self, path: str | Path) -> Path:
