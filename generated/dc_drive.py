@@ -1143,6 +1143,14 @@ def _lowest_curvature(H: np.ndarray) -> np.ndarray:
     return np.linalg.eigvalsh(0.5 * (H + np.swapaxes(H, -1, -2)))[..., 0]
 
 
+def _definite(H: np.ndarray) -> np.ndarray:
+    """Whether each symmetric matrix H (..., p, p) is positive definite beyond rounding: its
+    smallest eigenvalue above ROUNDING times its largest entry (a singular H, the Hessian
+    along a valley of minima, can show a positive eigenvalue of rounding's size, and then
+    fails to solve or to factor)."""
+    return _lowest_curvature(H) > ROUNDING * np.abs(H).max((-1, -2))
+
+
 def _newton_several(P: np.ndarray, k, iterations: int = 12) -> tuple[np.ndarray, np.ndarray]:
     """`_newton` for several unknowns: the stationary point of each row P near k (rows,
     unknowns), and whether it converged: the gradient within rounding of the terms it sums
@@ -1154,7 +1162,7 @@ def _newton_several(P: np.ndarray, k, iterations: int = 12) -> tuple[np.ndarray,
     for _ in range(iterations):
         _, gradient, H = _local_form(_shift(T, k))
         size = _local_form(_shift(sizes, np.abs(k)))[1]
-        ok = _lowest_curvature(H) > 0
+        ok = _definite(H)
         safe = np.where(ok[..., None, None], H, np.eye(len(UNKNOWNS)))
         step = np.where(ok[..., None], -np.linalg.solve(safe, gradient[..., None])[..., 0], 0.0)
         settled = ok & (
@@ -1193,7 +1201,7 @@ def _curvature_floor_several(A: np.ndarray, reach: np.ndarray) -> np.ndarray:
     the box by their Bernstein coefficients (see `_search`); the least eigenvalue of the
     interval matrix is at least its middle's less the Frobenius norm of its radius."""
     H = _local_form(A)[2]
-    ok = _lowest_curvature(H) > 0
+    ok = _definite(H)
     L = np.linalg.cholesky(np.where(ok[..., None, None], H, np.eye(len(UNKNOWNS))))
     inverse = np.linalg.inv(L)
     normal = np.einsum("...ki,...lj,...ijg->...klg", inverse, inverse, _second_derivatives(A))
@@ -1222,7 +1230,7 @@ def _stationary(P: np.ndarray, k):
 def _convex(A: np.ndarray) -> np.ndarray:
     """Whether J is convex at the centre of the expansions A (J_2 > 0; several: the
     Hessian positive definite)."""
-    return A[..., 2] > 0 if SCALAR else _lowest_curvature(_local_form(A)[2]) > 0
+    return A[..., 2] > 0 if SCALAR else _definite(_local_form(A)[2])
 
 
 def _floor(A: np.ndarray, reach):
@@ -1339,7 +1347,8 @@ def _descend(U: np.ndarray, x: np.ndarray, iterations: int = 80) -> tuple[np.nda
         free, H = _free_hessian(here, gradient, H)
         lowest = _lowest_curvature(H)
         scale = np.abs(H).max((1, 2))
-        H = H + np.maximum(1e-9 * scale - lowest, 0.0)[:, None, None] * np.eye(x.shape[1])
+        shift = np.maximum(1e-9 * scale - lowest, 0.0) + (scale == 0)  # J flat here: I
+        H = H + shift[:, None, None] * np.eye(x.shape[1])
         step = -np.linalg.solve(H, np.where(free, gradient, 0.0)[..., None])[..., 0]
         trials = np.clip(here[:, None] + _STEPS[None, :, None] * step[:, None], 0.0, 1.0)
         better = _evaluate(U, trials) < value[:, None]
@@ -1360,7 +1369,7 @@ def _descend(U: np.ndarray, x: np.ndarray, iterations: int = 80) -> tuple[np.nda
         size = _local_form(_shift(sizes, x))[1]
         free, H = _free_hessian(x, gradient, H, strict=False)
         slope = np.where(free, gradient, 0.0)
-        minimum = (_lowest_curvature(H) > 0) & (np.abs(slope) <= 1e-6 * np.maximum(size, EPS)).all(1)
+        minimum = _definite(H) & (np.abs(slope) <= 1e-6 * np.maximum(size, EPS)).all(1)
         safe = np.where(minimum[:, None, None], H, np.eye(x.shape[1]))
         step = -np.linalg.solve(safe, slope[..., None])[..., 0]
         polished = np.clip(x + np.where(minimum[:, None], step, 0.0), 0.0, 1.0)

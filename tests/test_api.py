@@ -148,6 +148,24 @@ def test_to_scipy_has_the_frequency_response_of_the_exact_transfer_function(dc_d
     np.testing.assert_allclose(response, G(1j * w), rtol=1e-12)
 
 
+def test_to_scipy_takes_k_as_the_estimators_do(dc_drive):
+    """A vector in the order of the unknowns (fit(...).k), a dict by name, or a number for one
+    unknown (also as a vector of length 1): the same transfer function as by keywords."""
+    motor = mtt.load(mtt.example("dc_motor"))
+    # (s/10 + 2)(4 s + 1/10) + 1 = 0.4 s^2 + 8.01 s + 1.2, numerator 1, normalised by 0.4
+    for k in ([2, 3], (2.0, 3.0), np.array([2.0, 3.0]), {"jl": 3, "ra": 2}):
+        G = motor.to_scipy(k)
+        np.testing.assert_allclose(G.num, [2.5], rtol=1e-15)
+        np.testing.assert_allclose(G.den, [1.0, 20.025, 3.0], rtol=1e-15)
+    np.testing.assert_allclose(motor.to_scipy({"ra": 2}).den, motor.to_scipy(ra=2).den)
+    for bad in ([2.0], [1.0, 2.0, 3.0], [[2.0, 3.0]], 2.0):
+        assert "give k as a sequence of 2 values in that order" in str(kind_of(motor.to_scipy, bad))
+    assert kind_of(motor.to_scipy, [2, 3], ra=2).kind == "bad_argument"  # ra twice
+    assert kind_of(motor.to_scipy, {"km": 2}).kind == "substituted_parameter"
+    for k in ([10], np.array([10.0]), np.float64(10.0), "10"):
+        assert dc_drive.to_scipy(k).den.tolist() == [1.0, 10.0, 11.1, 11.0, 1.0]
+
+
 def test_to_control(dc_drive):
     control = pytest.importorskip("control")
     G = dc_drive.to_control(10)

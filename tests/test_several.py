@@ -272,3 +272,31 @@ def test_a_locally_identifiable_model_has_both_minima_and_a_warning():
         result = module.fit(t, u, y, hold="zoh")
     found = result.minima[np.argsort(result.minima[:, 0])]
     np.testing.assert_allclose(found, [[1.0, 3.0], [1.5, 2.0]], rtol=1e-3)
+
+
+def test_a_valley_of_minima_or_a_flat_criterion_is_a_message_not_a_linalg_error(dc_motor):
+    """r and c of an RC filter (only r c is identifiable: the criterion's minima form the
+    valley r c = 1e-3), and records that excite nothing: no local minimum is reported, fit
+    says why (the search solved with a singular Hessian, a LinAlgError, before)."""
+    import mtt
+
+    rc = mtt.load(Path(__file__).parent / "data" / "identifiability" / "rc.bg").estimator()
+    t = np.linspace(0.0, 0.05, 5001)
+    u = rc.input_signal("prbs", t, period=0.002)
+    clean = rc.simulate(t, u, [1000.0, 1e-6], hold="zoh")
+    for seed in range(3):
+        y = clean + 0.01 * np.random.default_rng(seed).standard_normal(t.size)
+        result = quiet(rc.fit, t, u, y, hold="zoh")
+        assert not result.ok and np.isnan(result.k).all() and result.minima.shape == (0, 2)
+        assert "no local minimum within the bounds (it is flat along some direction" in (
+            result.message
+        )
+    t = np.linspace(0.0, 20.0, 2001)
+    zero, one = np.zeros_like(t), np.ones_like(t)
+    result = quiet(dc_motor.fit, t, zero, zero)
+    assert not result.ok and np.isinf(result.k_se).all()
+    assert "the information matrix is singular" in result.message
+    assert "the input is zero: it excites nothing" in result.warnings[0]
+    for options in ({}, dict(offset=False, initial_state=False)):  # a step, no response
+        result = quiet(dc_motor.fit, t, one, zero, **options)
+        assert any("is at the lower bound" in text for text in result.warnings)

@@ -273,6 +273,8 @@ class Model:
         return control.tf(*self._coefficients(k, known))
 
     def _coefficients(self, k: object, known: dict):
+        """k as the generated modules take it: a number (one unknown), a sequence or array
+        in the order of `unknowns` (fit(...).k), or a dict by name."""
         values = dict(known)
         if k is not None:
             given = _by_name(self.name, self.unknowns, k)
@@ -368,12 +370,13 @@ class Model:
 
 
 def _by_name(model: str, unknowns: tuple[str, ...], k: object) -> dict[str, object]:
-    """k as values by name: one unknown's value, or a sequence in the order of the unknowns,
-    or a dict by name."""
+    """k as the generated modules take it, as values by name: one unknown's value (also as a
+    vector of length 1), or a sequence in the order of the unknowns, or a dict by name."""
     if isinstance(k, Mapping):
         return dict(k)
-    if len(unknowns) == 1:
-        return {unknowns[0]: k}
+    if len(unknowns) == 1:  # a number, or a vector of length 1 (a fit's k) as one
+        vector = not isinstance(k, str) and hasattr(k, "__len__") and len(k) == 1
+        return {unknowns[0]: next(iter(k.ravel() if hasattr(k, "ravel") else k)) if vector else k}
     if isinstance(k, str) or not hasattr(k, "__len__") or len(k) != len(unknowns):
         raise MttError(
             f"{model} has {len(unknowns)} unknowns ({', '.join(unknowns)}): give k as a "
