@@ -7,8 +7,9 @@ own simulation of the transfer function), started at k = 5; it is the maximum-li
 estimate for this noise. Against it: the generated module's `fit` (no starting value), by
 refined instrumental variables (its default) and by least squares (the global minimiser of
 the filtered equation-error cost, C(s) = (1 + s)^5, beta = 0), both told the record starts
-at rest without offset, and its `estimate` (the paper's algorithm from k0 = 5, beta = 0.1,
-S0 = 1e-4).
+at rest without offset, each with its uncertainty and validation and without
+(`uncertainty=False`: the estimate alone, issue 8's fit), and its `estimate` (the paper's
+algorithm from k0 = 5, beta = 0.1, S0 = 1e-4).
 
 Times are medians over the seeds, in this process's CPU time (BLAS on one thread: see
 bench/estimate.py); errors are the root mean square of k - 10 over the seeds.
@@ -44,13 +45,6 @@ def output_error(module, t, u, y, k0: float = 5.0) -> float:
 AT_REST = dict(offset=False, initial_state=False)  # the step starts the record from rest
 
 
-def least_squares(module, t, u, y) -> float:
-    """The global minimiser of J over the record, without fit's uncertainty and checks:
-    the record's moments, the cost's polynomial, its global minimum (what fit was)."""
-    coefficients = module.moments(t, u, y, **AT_REST).criterion(module.theta())
-    return float(module._global_minimisers(coefficients, 0.0, (-np.inf, np.inf))[0])
-
-
 def main() -> None:
     warnings.simplefilter("ignore", UserWarning)  # the fits' advice (EstimationWarning)
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
@@ -64,7 +58,10 @@ def main() -> None:
         "output-error least squares (scipy)": lambda y: output_error(dc, t, u, y),
         "fit (instrumental variables)": lambda y: dc.fit(t, u, y, **AT_REST).k,
         "fit, method='ls'": lambda y: dc.fit(t, u, y, method="ls", C=None, **AT_REST).k,
-        "least-squares minimiser alone": lambda y: least_squares(dc, t, u, y),
+        "fit, uncertainty=False": lambda y: dc.fit(t, u, y, uncertainty=False, **AT_REST).k,
+        "fit, method='ls', uncertainty=False": lambda y: (
+            dc.fit(t, u, y, method="ls", C=None, uncertainty=False, **AT_REST).k
+        ),
         "estimate (k0 = 5)": lambda y: dc.estimate(t, u, y, k0=5.0).k,
     }
     times = {name: [] for name in methods}

@@ -2739,6 +2739,9 @@ class Fit:
         if not self.ok:
             raise ValueError(f"no fitted model to simulate: {self.message}")
         offset = self.offsets[_index_of("record", record, len(self.offsets))]
+        if math.isnan(offset):
+            raise ValueError("the record's operating point was not estimated (a fit with "
+                             "uncertainty=False): fit with uncertainty=True, or offset=False")  # fmt: skip
         return simulate(t, u, self.k, hold=self.hold, **self.known) + offset
 
 
@@ -2915,7 +2918,8 @@ def _model_point():
 
 
 def fit(t, u, y, *, method: str = "iv", C="auto", k0=None, bounds=None, offset: bool = True,
-        initial_state: bool = True, hold: str = "linear", beta: float = 0.0, **known) -> Fit:  # fmt: skip
+        initial_state: bool = True, hold: str = "linear", beta: float = 0.0,
+        uncertainty: bool = True, **known) -> Fit:  # fmt: skip
     """Fit k to whole records of input u and output y at times t: no prior, nothing to tune.
 
     t, u, y are arrays (one record) or lists of arrays (several experiments: their moments
@@ -2936,15 +2940,20 @@ def fit(t, u, y, *, method: str = "iv", C="auto", k0=None, bounds=None, offset: 
     prefilter. offset: estimate a constant offset (an operating point of u and y);
     initial_state: allow the system not to be at rest at the first sample. Both are
     nuisance parameters, projected out. beta >= 0 weighs recent data more (0: all alike).
+    uncertainty=False: the estimate and the criterion alone, several times faster (no
+    standard error, no validation against the simulated output: k_se, ci, fit_percent,
+    residual_rms, noise_std and any offsets to estimate are NaN), for many records.
     Every problem a user can act on is in `warnings` and issued as an EstimationWarning.
     """
     return fit_records(Records(_records(t, u, y)), method=method, C=C, k0=k0, bounds=bounds,
-                       offset=offset, initial_state=initial_state, hold=hold, beta=beta, **known)  # fmt: skip
+                       offset=offset, initial_state=initial_state, hold=hold, beta=beta,
+                       uncertainty=uncertainty, **known)  # fmt: skip
 
 
 def fit_records(records, *, method: str = "iv", C="auto", k0=None, bounds=None,
                 offset: bool = True, initial_state: bool = True, hold: str = "linear",
-                beta: float = 0.0, keep: bool = True, **known) -> Fit:  # fmt: skip
+                beta: float = 0.0, keep: bool = True, uncertainty: bool = True,
+                **known) -> Fit:  # fmt: skip
     """`fit` over records wherever they are held: `Records` (here) or an object with the
     same methods (shapes, moments, validate, residual_sum) whose answers are sums over
     records held elsewhere. Only those sums and the shapes reach this function, so a fit
@@ -2998,7 +3007,7 @@ def fit_records(records, *, method: str = "iv", C="auto", k0=None, bounds=None,
     return _finish(Theta, records, shapes, k, coefficients, method=method, c=c,
                    iterations=iterations, bounds=bounds, beta=beta, notes=notes,
                    automatic=automatic, settings=settings, last_moments=total, keep=keep,
-                   found=found, others=others)  # fmt: skip
+                   found=found, others=others, uncertainty=bool(uncertainty))  # fmt: skip
 
 
 # The fit's verdict: its uncertainty, its fit and the warnings a user can act on ------------------
@@ -3173,7 +3182,8 @@ def _criterion_curvature(coefficients: np.ndarray, k) -> np.ndarray:
 
 
 def _finish(Theta, records, shapes, k, coefficients, *, method, c, iterations, bounds, beta,
-            notes, automatic, settings, last_moments, keep, found=None, others=()) -> Fit:  # fmt: skip
+            notes, automatic, settings, last_moments, keep, found=None, others=(),
+            uncertainty=True) -> Fit:  # fmt: skip
     """The Fit: validation at k, uncertainty, warnings (issued as EstimationWarning)."""
     nuisances = settings["offset"] or settings["initial_state"]
     said, idle = _input_warnings(shapes, settings["hold"], nuisances)
@@ -3183,7 +3193,6 @@ def _finish(Theta, records, shapes, k, coefficients, *, method, c, iterations, b
         found_ += (_auto_filter_warnings(step, min(shape.span for shape in shapes)) if automatic
                    else _filter_warnings_at(c, step))  # fmt: skip
     minima = _fit_minima(coefficients, bounds, found)
-    empty = tuple(np.zeros(0) for _ in shapes) if keep else ()
     count_ = len(UNKNOWNS)
     common = dict(method=method, iterations=iterations, minima=minima, coefficients=coefficients,
                   bounds=bounds, filter=c, hold=settings["hold"], known=dict(settings["known"]))  # fmt: skip
@@ -3200,13 +3209,16 @@ def _finish(Theta, records, shapes, k, coefficients, *, method, c, iterations, b
                 "the criterion has no local minimum within the bounds (it is flat along some "
                 "direction there): the data do not determine the unknowns"
             )
-        none = math.nan if SCALAR else np.full(count_, math.nan)
-        infinite = math.inf if SCALAR else np.full(count_, math.inf)
-        return _issued(Fit(none, infinite, (none, none) if SCALAR else np.stack([none] * 2, 1),
-                           ok=False, message=message, warnings=tuple(found_),
-                           fit_percent=math.nan, residual_rms=math.nan, noise_std=math.nan,
-                           offsets=tuple(0.0 for _ in shapes), fitted=empty, residuals=empty,
-                           covariance=np.full((count_, count_), math.nan), **common))  # fmt: skip
+        none = math.nan if SCALAR else np.full(len(UNKNOWNS), math.nan)
+        return _unvalidated(shapes, keep, 0.0, k=none, k_se=math.inf, ok=False, message=message,
+                            warnings=tuple(found_), **common)  # fmt: skip
+    if not uncertainty:  # the estimate alone, for speed: many records, or every few samples
+        found_ += _box_warnings(k, bounds, found)
+        message = (f"{method}: {_named_point(k)} (uncertainty=False: no standard error, no "
+                   "validation)")  # fmt: skip
+        offset = math.nan if settings["offset"] else 0.0  # (estimated in the validation)
+        return _unvalidated(shapes, keep, offset, k=k, k_se=math.nan, ok=True, message=message,
+                            warnings=tuple(found_), **common)  # fmt: skip
     with np.errstate(all="ignore"):
         parts = records.validate(Theta, k, method, c, beta, settings, keep)
         count = sum(shape.samples for shape in shapes)
@@ -3310,20 +3322,7 @@ def _finish(Theta, records, shapes, k, coefficients, *, method, c, iterations, b
             f"the record is short: it spans {span:.3g}, under half the slowest time constant "
             f"of the fitted model ({slowest:.3g}), so the data see little of its dynamics"
         )
-    for name, value, (lo, hi) in zip(UNKNOWNS, np.atleast_1d(k), np.reshape(bounds, (-1, 2)),
-                                     strict=True):  # fmt: skip
-        for side, bound in (("lower", lo), ("upper", hi)):
-            if value == bound:
-                found_.append(
-                    f"{name} = {value:.6g} is at the {side} bound: the criterion's minimum may "
-                    "lie outside the bounds"
-                )
-    if found is not None and not found.certified:
-        found_.append(
-            "the global search could not prove, within its budget, that no point within the "
-            "bounds fits better than the estimate (the criterion is nearly flat along some "
-            "direction there): the estimate is the lowest minimum found"
-        )
+    found_ += _box_warnings(k, bounds, found)
     whiteness = sum(part.whiteness for part in parts)
     lags = WHITENESS_LAGS * len(parts)
     if ok and not clean and whiteness > lags + WHITENESS_LEVEL * math.sqrt(2 * lags):
@@ -3342,6 +3341,40 @@ def _finish(Theta, records, shapes, k, coefficients, *, method, c, iterations, b
         residuals=tuple(part.residuals for part in parts) if keep else (),
         covariance=covariance, **common,
     ))  # fmt: skip
+
+
+def _box_warnings(k, bounds, found) -> list[str]:
+    """An estimate at a bound, and a global search that could not certify its minimum."""
+    said: list[str] = []
+    for name, value, (lo, hi) in zip(UNKNOWNS, np.atleast_1d(k), np.reshape(bounds, (-1, 2)),
+                                     strict=True):  # fmt: skip
+        for side, bound in (("lower", lo), ("upper", hi)):
+            if value == bound:
+                said.append(
+                    f"{name} = {value:.6g} is at the {side} bound: the criterion's minimum may "
+                    "lie outside the bounds"
+                )
+    if found is not None and not found.certified:
+        said.append(
+            "the global search could not prove, within its budget, that no point within the "
+            "bounds fits better than the estimate (the criterion is nearly flat along some "
+            "direction there): the estimate is the lowest minimum found"
+        )
+    return said
+
+
+def _unvalidated(shapes, keep: bool, offset: float, *, k, k_se: float, **fields) -> Fit:
+    """A Fit without validation: no estimate (k NaN, k_se inf, offsets 0), or
+    uncertainty=False (k alone; k_se and the fit measures NaN, the offsets too if they were
+    to be estimated)."""
+    count = len(UNKNOWNS)
+    k_se = k_se if SCALAR else np.full(count, k_se)
+    ci = (k - Z95 * k_se, k + Z95 * k_se)
+    empty = tuple(np.zeros(0) for _ in shapes) if keep else ()
+    return _issued(Fit(k, k_se, ci if SCALAR else np.stack(ci, 1), fit_percent=math.nan,
+                       residual_rms=math.nan, noise_std=math.nan,
+                       offsets=tuple(offset for _ in shapes), fitted=empty, residuals=empty,
+                       covariance=np.full((count, count), math.nan), **fields))  # fmt: skip
 
 
 def _issued(result: Fit) -> Fit:

@@ -102,6 +102,28 @@ def test_offset_and_initial_state_are_nuisances(dc_drive):
     )
 
 
+def test_without_uncertainty_the_estimate_is_the_same_alone(dc_drive):
+    """uncertainty=False skips the validation: the same k to the bit, for both methods, and
+    NaN (not a number that looks measured) where the validation would have said more."""
+    t, u, y = record(3, 20.0, t_end=100.0, offset=0.3)
+    for method in ("iv", "ls"):
+        whole = quiet_fit(dc_drive, t, u, y, hold="zoh", method=method)
+        alone = quiet_fit(dc_drive, t, u, y, hold="zoh", method=method, uncertainty=False)
+        assert alone.k == whole.k and alone.ok and whole.ok
+        assert alone.iterations == whole.iterations
+        np.testing.assert_array_equal(alone.coefficients, whole.coefficients)
+        assert math.isnan(alone.k_se) and all(math.isnan(v) for v in alone.ci)
+        assert math.isnan(alone.fit_percent) and math.isnan(alone.noise_std)
+        assert math.isnan(alone.offsets[0])  # the operating point is estimated in validation
+        assert "uncertainty=False" in alone.message
+        with pytest.raises(ValueError, match="operating point was not estimated"):
+            alone.simulate(t, u)
+    at_rest = quiet_fit(dc_drive, t, u, y - 0.3, hold="zoh", offset=False, uncertainty=False)
+    assert at_rest.offsets == (0.0,) and at_rest.simulate(t, u)[0] == 0.0
+    low = quiet_fit(dc_drive, t, u, y, hold="zoh", bounds=(1.0, 5.0), uncertainty=False)
+    assert low.k == 5.0 and any("upper bound" in text for text in low.warnings)
+
+
 def test_several_records_add_their_moments(dc_drive):
     first, second = record(1, 20.0, t_end=100.0), record(2, 20.0, t_end=60.0)
     both = quiet_fit(

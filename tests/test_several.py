@@ -156,6 +156,9 @@ def test_fit_takes_vectors_and_dicts_and_reports_bounds_and_minima(dc_motor):
     assert result.minima.shape[1] == 2 and np.allclose(result.minima[0], result.k)
     assert np.all(np.abs(result.k - MOTOR) < 4 * result.k_se)
     np.testing.assert_allclose(result.k_se, np.sqrt(np.diag(result.covariance)))
+    alone = quiet(dc_motor.fit, t, u, y, hold="zoh", uncertainty=False)  # the estimate alone
+    np.testing.assert_array_equal(alone.k, result.k)
+    assert alone.k_se.shape == (2,) and np.isnan(alone.k_se).all() and np.isnan(alone.ci).all()
     narrow = quiet(dc_motor.fit, t, u, y, hold="zoh", bounds=[(0.1, 10.0), (1.0, 5.0)])
     assert narrow.k[1] == 5.0 and any("jl = 5 is at the upper bound" in w for w in narrow.warnings)
     for bad, message in (
