@@ -17,6 +17,7 @@ from typing import TYPE_CHECKING
 from mtt import __version__
 from mtt.cli import experiment_args, identify, views
 from mtt.cli.options import (
+    Parser,
     add_parameter_options,
     add_selection_options,
     choice_from_args,
@@ -283,7 +284,7 @@ def cmd_theta(args) -> int:
 
 
 def make_parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(
+    parser = Parser(
         prog="mtt",
         description="Bond graph models of partially known systems: check them, derive their "
         "transfer function polynomial in the unknown parameter, and generate estimators.",
