@@ -589,7 +589,7 @@ def _filter_text(text: str) -> np.ndarray:
         if peek() in ("^", "**"):
             take()
             exponent = take("number")[1]
-            if exponent != int(exponent) or exponent > MAX_FILTER_DEGREE:
+            if not (math.isfinite(exponent) and exponent == int(exponent) <= MAX_FILTER_DEGREE):
                 raise ValueError(
                     f"C(s) = {text!r}: the exponent {exponent:g} must be a whole number from 0 "
                     f"to {MAX_FILTER_DEGREE}"
@@ -3276,6 +3276,9 @@ class Tracker:
 # From the command line: python THIS_FILE fit|estimate data.csv ... ------------------------------
 
 _NUMBER = re.compile(r"[+-]?(?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d+)?")
+# argparse takes "-1e-3", "-inf" or "-1:0" for an option (it knows only -1 and -.5 as
+# numbers): they are values here, as no option starts with a digit, ".", inf or nan
+_NEGATIVE_NUMBER = re.compile(r"-(?:\.?\d|inf|nan)", re.IGNORECASE)
 
 
 def read_csv(path, columns: tuple[str, ...] = ("t", "u", "y")) -> tuple[np.ndarray, ...]:
@@ -3412,6 +3415,7 @@ def _parser() -> argparse.ArgumentParser:
         sub.add_argument("--set", action="append", default=[], metavar="NAME=VALUE",
                          help="a known parameter")  # fmt: skip
         sub.add_argument("--json", action="store_true", help="print the results as JSON")
+        sub._negative_number_matcher = _NEGATIVE_NUMBER
     return parser
 
 
