@@ -32,6 +32,14 @@ class Parser(argparse.ArgumentParser):
         self._negative_number_matcher = NEGATIVE_NUMBER
 
 
+def given(text: str) -> str:
+    """A file or directory named on the command line: an empty name is refused (it read as
+    an option not given: `--csv ''` wrote nothing, `--copy ''` copied into '.')."""
+    if not text:
+        raise argparse.ArgumentTypeError("an empty name")
+    return text
+
+
 def _is_name(text: str) -> bool:
     """A parameter name, dotted for a subsystem's (`motor.ra`)."""
     return all(part.isidentifier() for part in text.split("."))

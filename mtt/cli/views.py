@@ -14,6 +14,7 @@ from mtt.cli.options import (
     add_parameter_options,
     add_selection_options,
     choice_from_args,
+    given,
     selection_from_args,
 )
 from mtt.language.diagnostics import ModelError, MttError
@@ -204,7 +205,9 @@ def register(commands) -> None:
         description="List the example models shipped with mtt (the paper's DC drive and "
         "absorber among them), or copy them all to a directory to start from.",
     )
-    examples.add_argument("--copy", metavar="DIR", help="copy every example model into DIR")
+    examples.add_argument(
+        "--copy", type=given, metavar="DIR", help="copy every example model into DIR"
+    )
     examples.add_argument("--force", action="store_true", help="replace files that differ")
     examples.add_argument("--json", action="store_true", help="print one JSON object")
     examples.set_defaults(run=cmd_examples)
