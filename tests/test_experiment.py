@@ -322,8 +322,10 @@ def test_fit_warnings_go_to_stderr(capsys):
         (["--filter", "(1+sqrt(-1)*s)^5"], "cannot read 'qrt(-1)*s)^5'"),
         (["--filter", "(1+1e-300*s)^5"], "its leading coefficient underflows to 0"),
         (["--filter", "(1+s)^5", "--filter-T", "2"], "--filter and --filter-T do not go together"),
-        (["--set", "ra=1e400"], "error[out_of_range]: a coefficient of Theta, 1000000"),
-        (["--keep", "ra", "--set", "ra=1e400"], "error[out_of_range]: the value of ra, 10000"),
+        (["--set", "ra=1e400"], "error[out_of_range]: a coefficient of Theta, about 1.000e+401"),
+        (["--keep", "ra", "--set", "ra=1e400"], "the value of ra, about 1.000e+400, is beyond"),
+        # its first 40 digits alone, 1/1000..., read as a number in range
+        (["--keep", "ra", "--set", "ra=1e-400"], "the value of ra, about 1.000e-400, is beyond"),
         (["--signal", "chirp"], "chirp: No such file or directory"),
         (["--signal", "step", "--period", "2"], "--period applies to prbs, square and multisine"),
         (["--columns", "a,b"], "--columns names the columns of --data files"),
@@ -338,6 +340,9 @@ def test_fit_warnings_go_to_stderr(capsys):
         ),
         (["--data", "under.csv"], "under.csv:2: column 'y' holds '1_0', not a number"),
         (["--data", "latin.csv"], "latin.csv: not UTF-8 text"),
+        # in range for Theta, but the simulation overflowed: NaN samples, exit status 0
+        (["--set", "ra=1e300"], "the simulated output is not finite from t = 0.01"),
+        (["--amplitude", "1e308", "--noise-snr", "-20"], "the output with noise is not finite"),
     ],
 )
 def test_fit_user_errors_exit_2(args, message, tmp_path, monkeypatch, capsys):

@@ -114,6 +114,7 @@ def experiment_data(module: ModuleType, args, several: bool = False) -> list[Dat
             f"the model gives no value of {', '.join(k)} to simulate with: pass --true {example}"
         )
     clean = module.simulate(t, u, k, hold=args.hold)
+    _finite(clean, t, "the simulated output")
     seed = DEFAULT_SEED if args.seed is None else args.seed
     note = f"{t.size} samples simulated with {unknowns.named(module, k, 'g')}, input {source}"
     y = clean
@@ -128,7 +129,19 @@ def experiment_data(module: ModuleType, args, several: bool = False) -> list[Dat
             raise UsageError(f"--noise-snr must be a finite number of dB, not {args.noise_snr}")
         y = module.with_noise(clean, args.noise_snr, seed=seed)
         note += f", white Gaussian noise at {args.noise_snr:g} dB SNR (seed {seed})"
+    _finite(y, t, "the output with noise")
     return [Data(t, u, y, clean, k, note)]
+
+
+def _finite(y: np.ndarray, t: np.ndarray, what: str) -> None:
+    """Refuse a simulation that left floating point (NaN or inf samples were written as
+    data, with exit status 0)."""
+    bad = np.flatnonzero(~np.isfinite(y))
+    if bad.size:
+        raise UsageError(
+            f"{what} is not finite from t = {t[bad[0]]:g} (it overflows floating point): give "
+            "the parameters, the input and the noise values in units nearer 1"
+        )
 
 
 def _columns(text: str | None) -> tuple[str, str, str]:
