@@ -48,12 +48,23 @@ def _print_json(record: dict) -> None:
     print(json.dumps(record))
 
 
-def _save(figure, path: str) -> None:
+def _dpi(text: str) -> float:
+    """--dpi, as the other commands that draw take it."""
+    try:
+        dpi = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a number, not {text!r}") from None
+    if not 10 <= dpi <= 2400:  # also refuses nan
+        raise argparse.ArgumentTypeError(f"--dpi must be from 10 to 2400, not {text}")
+    return dpi
+
+
+def _save(figure, path: str, dpi: float) -> None:
     """Write a picture; a path that cannot be written is the user's error, said as such."""
     from mtt.cli import draw
 
     try:
-        draw.save(figure, path)
+        draw.save(figure, path, dpi)
     except OSError as exc:
         raise MttError(f"{exc.filename or path}: {exc.strerror}", kind="io") from None
 
@@ -71,7 +82,7 @@ def cmd_draw(args) -> int:
         problem = exc
         print(exc.render(), file=sys.stderr)
         print(f"mtt draw: warning: drawn without causal strokes ({exc.kind})", file=sys.stderr)
-    _save(draw.figure(graph, causal), args.out)
+    _save(draw.figure(graph, causal), args.out, args.dpi)
     if args.json:
         _print_json(
             {"ok": True, "file": args.file, "out": args.out, "model": graph.name,
@@ -111,7 +122,7 @@ def cmd_bode(args) -> int:
     data = bode.bode(systems)
     if args.out:
         title = f"{model.name}: Bode diagram from {model.input} to {model.output}"
-        _save(bode.figure(data, unknown=unknown or "k", title=title), args.out)
+        _save(bode.figure(data, unknown=unknown or "k", title=title), args.out, args.dpi)
     if args.json:
         _print_json(
             {"ok": True, "file": args.file, "out": args.out, "model": model.name,
@@ -179,6 +190,8 @@ def register(commands) -> None:
     draw.add_argument("file", metavar="FILE")
     draw.add_argument("-o", "--out", required=True, type=_figure_path,
                       metavar="FILE.svg|png|pdf", help="the picture to write")  # fmt: skip
+    draw.add_argument("--dpi", type=_dpi, default=150.0,
+                      help="resolution of a .png (default 150)")  # fmt: skip
     add_selection_options(draw)
     draw.add_argument("--json", action="store_true", help="print one JSON object")
     draw.set_defaults(run=cmd_draw)
@@ -194,6 +207,8 @@ def register(commands) -> None:
                       help="values of the unknown (default: the model file's)")  # fmt: skip
     bode.add_argument("-o", "--out", type=_figure_path, metavar="FILE.svg|png|pdf",
                       help="the figure to write")  # fmt: skip
+    bode.add_argument("--dpi", type=_dpi, default=150.0,
+                      help="resolution of a .png (default 150)")  # fmt: skip
     add_parameter_options(bode)
     bode.add_argument("--json", action="store_true",
                       help="print the frequencies, magnitudes and phases as JSON")  # fmt: skip
