@@ -396,3 +396,30 @@ def test_json_results_say_ok(tmp_path, capsys):
     assert status == 0 and record["ok"] and record["t"] == [0.0, 0.5, 1.0] and len(record["y"]) == 3
     status, out, _ = mtt(capsys, "simulate", DC_DRIVE, "--dt", "-1", "--json")
     assert status == 2 and json.loads(out)["ok"] is False
+
+
+def test_figure_labels_in_physical_words_and_a_legend_beside_the_curves(monkeypatch, capsys):
+    # issue 12 item 6: Fig. 5's axes say what the signals are (the model's words for its
+    # source and detector), and Fig. 8's legend is outside the axes, over no curve
+    from mtt.cli import plots
+
+    figures = {}
+    monkeypatch.setattr(plots, "_save", lambda figure, path, dpi: figures.update({path: figure}))
+    status, _, err = mtt(capsys, "estimate", *ABSORBER_DATA, "--k0", "1", "--filter-T", "0.5",
+                         "1", "--data-plot", "fig5.png", "--cost-range", "-1", "1",
+                         "--cost-plot", "fig8.png")  # fmt: skip
+    assert status == 0, err
+    top, bottom = figures["fig5.png"].axes
+    assert top.get_ylabel().replace("\n", " ") == "solute feed flow (Sf:feed)"
+    assert bottom.get_ylabel().replace("\n", " ") == "liquid product concentration (De:x_l)"
+    assert bottom.get_xlabel() == "time t (s)"
+    fig8 = figures["fig8.png"]
+    fig8.canvas.draw()
+    (legend,) = fig8.legends
+    (ax,) = fig8.axes
+    box, frame = legend.get_window_extent(), ax.get_window_extent()
+    assert box.x0 >= frame.x1  # beside the axes, not over them
+    assert [text.get_text() for text in legend.get_texts()][:2] == [
+        "C(s) = (1 + 0.5 s)^4",
+        "C(s) = (1 + s)^4",
+    ]
