@@ -169,6 +169,7 @@ def _choice(name: str, value: str, choices: tuple[str, ...]) -> str:
 
 SCALAR = len(UNKNOWNS) == 1  # one unknown: k is a float; several: a vector in UNKNOWNS order
 DEFAULT_RANGE = 10.0  # several unknowns: each searched within this factor of the model's value
+MAX_SIGNAL = 1e150  # size of an input or output sample: sums of squares stay finite
 
 
 def _point(name: str, value) -> float | np.ndarray:
@@ -333,8 +334,20 @@ def _array(name: str, value) -> np.ndarray:
     return array
 
 
+def _bounded(name: str, array: np.ndarray) -> None:
+    """A signal whose squares and products stay within floating point (1e300 in a CSV file
+    made fit's least squares fail inside LAPACK, "SVD did not converge")."""
+    if array.size and np.abs(array).max() > MAX_SIGNAL:
+        i = int(np.argmax(np.abs(array)))
+        raise ValueError(
+            f"{name}[{i}] is {array[i]:g}: signals must stay within {MAX_SIGNAL:g} in size "
+            "(their squares overflow floating point); scale them to units nearer 1"
+        )
+
+
 def _signals(*named: tuple[str, object], minimum: int, after: float = -math.inf) -> list:
-    """Sample times (the first) and signals, checked: finite, same length, t increasing.
+    """Sample times (the first) and signals, checked: finite, bounded, same length, t
+    increasing.
 
     `after` is the time of a sample already seen (a Tracker's last): t must follow it.
     """
@@ -343,6 +356,8 @@ def _signals(*named: tuple[str, object], minimum: int, after: float = -math.inf)
         for (name, _), array in zip(named, arrays, strict=True):
             if not math.isfinite(array[0]):
                 raise ValueError(f"{name}[0] is {array[0]}: every value must be finite")
+        for (name, _), array in list(zip(named, arrays, strict=True))[1:]:
+            _bounded(name, array)
         if not arrays[0][0] > after:
             raise ValueError(
                 f"t must be strictly increasing: t[0] = {arrays[0][0]} follows the last "
@@ -350,6 +365,8 @@ def _signals(*named: tuple[str, object], minimum: int, after: float = -math.inf)
             )
         return arrays
     arrays = [_array(name, value) for name, value in named]
+    for (name, _), array in list(zip(named, arrays, strict=True))[1:]:
+        _bounded(name, array)
     lengths = [array.size for array in arrays]
     if len(set(lengths)) > 1:
         names = ", ".join(name for name, _ in named)
@@ -494,7 +511,15 @@ def with_noise(y, snr_db: float, *, seed: int = 0) -> np.ndarray:
     spread = float(np.var(y))
     if spread == 0:
         raise ValueError("y is constant: a signal-to-noise ratio gives it no noise level")
-    scale = math.sqrt(spread / 10 ** (snr_db / 10))
+    try:  # 10^(snr_db/10) leaves floating point for |snr_db| above 3000
+        scale = math.sqrt(spread) * 10.0 ** (-snr_db / 20)
+    except OverflowError:
+        scale = math.inf
+    if not scale <= MAX_SIGNAL / 100:
+        raise ValueError(
+            f"snr_db = {snr_db:g} makes noise of standard deviation {scale:.3g}, beyond "
+            f"{MAX_SIGNAL / 100:g}: too large for floating point"
+        )
     return y + scale * np.random.default_rng(seed).standard_normal(y.size)
 
 

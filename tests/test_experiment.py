@@ -187,7 +187,10 @@ def test_a_stopped_run_is_reported_with_exit_status_1(capsys):
         (["--k0", "1", "--beta", "-1"], "beta must be >= 0"),
         (["--k0", "nan"], "'nan' in 'nan' is not finite"),
         (["--k0", "1", "--dt", "0"], "need 0 < --dt <= --t-end"),
-        (["--k0", "1", "--noise-uniform", "-1"], "--noise-uniform must be >= 0"),
+        (
+            ["--k0", "1", "--noise-uniform", "-1"],
+            "--noise-uniform must be from 0 to 1e+148, not -1",
+        ),
         (["--k0", "1", "--cost-plot", "c.png", "--cost-range", "1", "0"], "needs A < B"),
         (["--k0", "1", "--data", "d.csv", "--k", "3"], "--data and --true do not go together"),
         (["--k0", "1", "--data", "missing.csv"], "missing.csv: No such file or directory"),
@@ -342,7 +345,12 @@ def test_fit_warnings_go_to_stderr(capsys):
         (["--data", "latin.csv"], "latin.csv: not UTF-8 text"),
         # in range for Theta, but the simulation overflowed: NaN samples, exit status 0
         (["--set", "ra=1e300"], "the simulated output is not finite from t = 0.01"),
-        (["--amplitude", "1e308", "--noise-snr", "-20"], "the output with noise is not finite"),
+        # signals and noise too large for floating point (the last two were internal errors,
+        # a CSV file of 1e300 a failure inside LAPACK)
+        (["--amplitude", "1e308"], "u[0] is 1e+308: signals must stay within 1e+150 in size"),
+        (["--data", "huge.csv"], "y[1] is 1e+300: signals must stay within 1e+150 in size"),
+        (["--noise-snr", "-1e4"], "snr_db = -10000 makes noise of standard deviation inf"),
+        (["--noise-uniform", "1.7e308"], "--noise-uniform must be from 0 to 1e+148"),
     ],
 )
 def test_fit_user_errors_exit_2(args, message, tmp_path, monkeypatch, capsys):
@@ -352,6 +360,7 @@ def test_fit_user_errors_exit_2(args, message, tmp_path, monkeypatch, capsys):
     Path("dup.csv").write_text("t,u,u\n0,1,0\n")
     Path("under.csv").write_text("t,u,y\n0,1,1_0\n")
     Path("latin.csv").write_bytes(b"t,u,y\n0,1,\xe9\n")
+    Path("huge.csv").write_text("t,u,y\n0,1,0\n1,1,1e300\n2,1,0\n")
     status, _, err = mtt(capsys, "fit", DC_DRIVE, *args)
     assert status == 2 and message in err and "Traceback" not in err
 

@@ -201,6 +201,12 @@ def test_input_signals_and_noise(dc_drive):
         dc_drive.input_signal("chirp", t)
     with pytest.raises(ValueError, match="y is constant"):
         dc_drive.with_noise(np.ones(5), 10.0)
+    for snr in (-1e4, -6200.0):  # a ZeroDivisionError and inf noise
+        with pytest.raises(ValueError, match=f"snr_db = {snr:g} makes noise of standard"):
+            dc_drive.with_noise(np.arange(5.0), snr)
+    assert np.array_equal(dc_drive.with_noise(np.arange(5.0), 1e4), np.arange(5.0))
+    with pytest.raises(ValueError, match=r"y\[2\] is -1e\+200: signals must stay within"):
+        dc_drive.fit(np.arange(4.0), np.ones(4), np.array([0, 1, -1e200, 0]))
 
 
 @pytest.mark.parametrize(
