@@ -484,14 +484,15 @@ def input_signal(kind: str, t, *, amplitude: float = 1.0, period: float | None =
     if not period > 0:
         raise ValueError(f"a {kind} needs a period > 0: give period= (the record spans {span:g})")
     elapsed = (t - t[0]) / period
+    if not elapsed[-1] <= 1 << 24:  # inf for period=1e-308: an OverflowError below
+        raise ValueError(
+            f"a {kind} of period {period:g} over {span:g} has more than {1 << 24} periods: use "
+            "a longer period"
+        )
     if kind == "square":
         return amplitude * np.where(elapsed % 1.0 < 0.5, 1.0, -1.0)
     if kind == "prbs":
         count = int(math.floor(elapsed[-1] + 1e-9)) + 1
-        if count > 1 << 24:
-            raise ValueError(
-                f"a PRBS switching every {period:g} over {span:g} is too long: use a longer period"
-            )
         bits = max(4, math.ceil(math.log2(count + 1)))
         state = np.random.default_rng(seed).integers(0, 2, bits)
         state[0] |= not state.any()
@@ -2908,6 +2909,12 @@ def fit_records(records, *, method: str = "iv", C="auto", k0=None, bounds=None,
     if not shapes:
         raise ValueError("no records to fit")
     _check_sizes(shapes, offset, initial_state)
+    longest = max(shape.span for shape in shapes)
+    if beta * longest > 700:  # e^-700: the start of a record weighs nothing in floating point
+        raise ValueError(
+            f"beta = {beta:g} weighs the start of a record of {longest:g} time units by "
+            f"e^-{beta * longest:.3g}, below floating point: use beta < {700 / longest:.3g}"
+        )
     settings = dict(hold=hold, offset=offset, initial_state=initial_state, known=known)
     notes: list[str] = []
     interval, span = _median_step(shapes), min(shape.span for shape in shapes)

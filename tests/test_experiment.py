@@ -351,6 +351,10 @@ def test_fit_warnings_go_to_stderr(capsys):
         (["--data", "huge.csv"], "y[1] is 1e+300: signals must stay within 1e+150 in size"),
         (["--noise-snr", "-1e4"], "snr_db = -10000 makes noise of standard deviation inf"),
         (["--noise-uniform", "1.7e308"], "--noise-uniform must be from 0 to 1e+148"),
+        (["--dt", "5e-324"], "--t-end / --dt = inf samples is too many"),  # internal errors,
+        (["--signal", "square", "--period", "1e-308"], "has more than 16777216 periods"),  # too
+        # a LinAlgError from inside LAPACK, its complaints on stderr
+        (["--signal", "prbs", "--beta", "1e18"], "beta = 1e+18 weighs the start of a record"),
     ],
 )
 def test_fit_user_errors_exit_2(args, message, tmp_path, monkeypatch, capsys):

@@ -65,9 +65,11 @@ def _signal(module: ModuleType, args) -> tuple[np.ndarray, np.ndarray, str]:
     dt = DEFAULT_DT if args.dt is None else args.dt
     if not (0 < dt <= t_end < np.inf):
         raise UsageError(f"need 0 < --dt <= --t-end, not --dt {dt} and --t-end {t_end}")
+    if not t_end / dt < MAX_SAMPLES:  # inf for --dt 5e-324: round() raised OverflowError
+        raise UsageError(
+            f"--t-end / --dt = {t_end / dt:.3g} samples is too many (at most {MAX_SAMPLES})"
+        )
     count = max(1, round(t_end / dt))
-    if count >= MAX_SAMPLES:
-        raise UsageError(f"--t-end / --dt = {count} samples is too many (at most {MAX_SAMPLES})")
     if kind == "step" and args.period is not None:
         raise UsageError("--period applies to prbs, square and multisine, not to a step")
     t = np.linspace(0.0, t_end, count + 1)

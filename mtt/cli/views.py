@@ -119,7 +119,10 @@ def cmd_bode(args) -> int:
     for k in values:
         num, den = model.transfer_function.at(**({unknown: k} if unknown else {}))
         systems.append((float(k) if unknown else float("nan"), num, den))
-    data = bode.bode(systems)
+    try:
+        data = bode.bode(systems)
+    except ValueError as exc:
+        raise MttError(str(exc), kind="out_of_range") from None
     if args.out:
         title = f"{model.name}: Bode diagram from {model.input} to {model.output}"
         _save(bode.figure(data, unknown=unknown or "k", title=title), args.out, args.dpi)
