@@ -143,12 +143,9 @@ def _wrapped(label: str, polynomial: sympy.Expr) -> str:
 
 
 def _magnitude(value: sympy.Expr) -> str:
-    """A number far outside floating point, shown by its leading digits and exponent
-    (its first digits alone, 1000... for 10^400 or 1/1000... for 10^-400, read as in range)."""
-    try:
-        return sympy.sstr(sympy.N(value, 4))
-    except (TypeError, ValueError, ArithmeticError):
-        return sympy.sstr(value)[:40] + "..."
+    """A number far outside floating point by its leading digits and exponent (its first
+    digits alone, 1000... for 10^400 or 1/1000... for 10^-400, read as in range)."""
+    return sympy.sstr(sympy.N(value, 4))
 
 
 def _in_range(theta: Theta, value: sympy.Expr, name: str | None = None) -> sympy.Expr:
