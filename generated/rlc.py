@@ -164,6 +164,7 @@ def _choice(name: str, value: str, choices: tuple[str, ...]) -> str:
 
 SCALAR = len(UNKNOWNS) == 1  # one unknown: k is a float; several: a vector in UNKNOWNS order
 DEFAULT_RANGE = 10.0  # several unknowns: each searched within this factor of the model's value
+MAX_SIGNAL = 1e150  # size of an input or output sample: sums of squares stay finite
 
 
 def _point(name: str, value) -> float | np.ndarray:
@@ -328,8 +329,20 @@ def _array(name: str, value) -> np.ndarray:
     return array
 
 
+def _bounded(name: str, array: np.ndarray) -> None:
+    """A signal whose squares and products stay within floating point (1e300 in a CSV file
+    made fit's least squares fail inside LAPACK, "SVD did not converge")."""
+    if array.size and np.abs(array).max() > MAX_SIGNAL:
+        i = int(np.argmax(np.abs(array)))
+        raise ValueError(
+            f"{name}[{i}] is {array[i]:g}: signals must stay within {MAX_SIGNAL:g} in size "
+            "(their squares overflow floating point); scale them to units nearer 1"
+        )
+
+
 def _signals(*named: tuple[str, object], minimum: int, after: float = -math.inf) -> list:
-    """Sample times (the first) and signals, checked: finite, same length, t increasing.
+    """Sample times (the first) and signals, checked: finite, bounded, same length, t
+    increasing.
 
     `after` is the time of a sample already seen (a Tracker's last): t must follow it.
     """
@@ -338,6 +351,8 @@ def _signals(*named: tuple[str, object], minimum: int, after: float = -math.inf)
         for (name, _), array in zip(named, arrays, strict=True):
             if not math.isfinite(array[0]):
                 raise ValueError(f"{name}[0] is {array[0]}: every value must be finite")
+        for (name, _), array in list(zip(named, arrays, strict=True))[1:]:
+            _bounded(name, array)
         if not arrays[0][0] > after:
             raise ValueError(
                 f"t must be strictly increasing: t[0] = {arrays[0][0]} follows the last "
@@ -345,6 +360,8 @@ def _signals(*named: tuple[str, object], minimum: int, after: float = -math.inf)
             )
         return arrays
     arrays = [_array(name, value) for name, value in named]
+    for (name, _), array in list(zip(named, arrays, strict=True))[1:]:
+        _bounded(name, array)
     lengths = [array.size for array in arrays]
     if len(set(lengths)) > 1:
         names = ", ".join(name for name, _ in named)
@@ -462,14 +479,15 @@ def input_signal(kind: str, t, *, amplitude: float = 1.0, period: float | None =
     if not period > 0:
         raise ValueError(f"a {kind} needs a period > 0: give period= (the record spans {span:g})")
     elapsed = (t - t[0]) / period
+    if not elapsed[-1] <= 1 << 24:  # inf for period=1e-308: an OverflowError below
+        raise ValueError(
+            f"a {kind} of period {period:g} over {span:g} has more than {1 << 24} periods: use "
+            "a longer period"
+        )
     if kind == "square":
         return amplitude * np.where(elapsed % 1.0 < 0.5, 1.0, -1.0)
     if kind == "prbs":
         count = int(math.floor(elapsed[-1] + 1e-9)) + 1
-        if count > 1 << 24:
-            raise ValueError(
-                f"a PRBS switching every {period:g} over {span:g} is too long: use a longer period"
-            )
         bits = max(4, math.ceil(math.log2(count + 1)))
         state = np.random.default_rng(seed).integers(0, 2, bits)
         state[0] |= not state.any()
@@ -489,7 +507,15 @@ def with_noise(y, snr_db: float, *, seed: int = 0) -> np.ndarray:
     spread = float(np.var(y))
     if spread == 0:
         raise ValueError("y is constant: a signal-to-noise ratio gives it no noise level")
-    scale = math.sqrt(spread / 10 ** (snr_db / 10))
+    try:  # 10^(snr_db/10) leaves floating point for |snr_db| above 3000
+        scale = math.sqrt(spread) * 10.0 ** (-snr_db / 20)
+    except OverflowError:
+        scale = math.inf
+    if not scale <= MAX_SIGNAL / 100:
+        raise ValueError(
+            f"snr_db = {snr_db:g} makes noise of standard deviation {scale:.3g}, beyond "
+            f"{MAX_SIGNAL / 100:g}: too large for floating point"
+        )
     return y + scale * np.random.default_rng(seed).standard_normal(y.size)
 
 
@@ -585,7 +611,7 @@ def _filter_text(text: str) -> np.ndarray:
         if peek() in ("^", "**"):
             take()
             exponent = take("number")[1]
-            if exponent != int(exponent) or exponent > MAX_FILTER_DEGREE:
+            if not (math.isfinite(exponent) and exponent == int(exponent) <= MAX_FILTER_DEGREE):
                 raise ValueError(
                     f"C(s) = {text!r}: the exponent {exponent:g} must be a whole number from 0 "
                     f"to {MAX_FILTER_DEGREE}"
@@ -2966,6 +2992,12 @@ def fit_records(records, *, method: str = "iv", C="auto", k0=None, bounds=None,
     if not shapes:
         raise ValueError("no records to fit")
     _check_sizes(shapes, offset, initial_state)
+    longest = max(shape.span for shape in shapes)
+    if beta * longest > 700:  # e^-700: the start of a record weighs nothing in floating point
+        raise ValueError(
+            f"beta = {beta:g} weighs the start of a record of {longest:g} time units by "
+            f"e^-{beta * longest:.3g}, below floating point: use beta < {700 / longest:.3g}"
+        )
     settings = dict(hold=hold, offset=offset, initial_state=initial_state, known=known)
     notes: list[str] = []
     interval, span = _median_step(shapes), min(shape.span for shape in shapes)
@@ -3455,6 +3487,9 @@ class Tracker:
 # From the command line: python THIS_FILE fit|estimate data.csv ... ------------------------------
 
 _NUMBER = re.compile(r"[+-]?(?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d+)?")
+# argparse takes "-1e-3", "-inf" or "-1:0" for an option (it knows only -1 and -.5 as
+# numbers): they are values here, as no option starts with a digit, ".", inf or nan
+_NEGATIVE_NUMBER = re.compile(r"-(?:\.?\d|inf|nan)", re.IGNORECASE)
 
 
 def read_csv(path, columns: tuple[str, ...] = ("t", "u", "y")) -> tuple[np.ndarray, ...]:
@@ -3591,6 +3626,7 @@ def _parser() -> argparse.ArgumentParser:
         sub.add_argument("--set", action="append", default=[], metavar="NAME=VALUE",
                          help="a known parameter")  # fmt: skip
         sub.add_argument("--json", action="store_true", help="print the results as JSON")
+        sub._negative_number_matcher = _NEGATIVE_NUMBER
     return parser
 
 

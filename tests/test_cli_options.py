@@ -63,3 +63,22 @@ def test_values_are_checked_against_the_unknowns():
     assert raised.value.kind == "bad_value"
     partial = in_unknowns_order({"jl": (0.0, 1.0)}, ("ra", "jl"), "--bounds", complete=False)
     assert partial == (None, (0.0, 1.0))
+
+
+def test_negative_numbers_are_values_on_the_mtt_command_line(capsys):
+    # argparse took -1e-3, -inf and -1:0 for options ("argument --k0: expected one argument")
+    from mtt.cli.main import make_parser
+
+    parse = make_parser().parse_args
+    args = parse(["estimate", "m.bg", "--k0", "-1e-3", "-2", "-.5", "--bounds", "-1e3", "-1"])
+    assert args.k0 == [-0.001, -2.0, -0.5] and args.bounds == (-1000.0, -1.0)
+    assert parse(["fit", "m.bg", "--bounds", "-1:0"]).bounds == (-1.0, 0.0)
+    assert parse(["fit", "m.bg", "--k0", "ra=-1,jl=2", "--true", "-1E+2"]).true == -100.0
+    assert parse(["bode", "m.bg", "--k", "-1e3,2"]).k == [-1000.0, 2.0]
+    for value in ("-inf", "-nan", "-Infinity"):
+        with pytest.raises(SystemExit):
+            parse(["estimate", "m.bg", "--k0", value])
+        assert f"argument --k0: {value!r} in {value!r} is not finite" in capsys.readouterr().err
+    with pytest.raises(SystemExit):  # an option is still an option
+        parse(["estimate", "m.bg", "--k0", "1", "-x"])
+    assert "unrecognized arguments: -x" in capsys.readouterr().err

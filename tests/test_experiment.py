@@ -187,7 +187,10 @@ def test_a_stopped_run_is_reported_with_exit_status_1(capsys):
         (["--k0", "1", "--beta", "-1"], "beta must be >= 0"),
         (["--k0", "nan"], "'nan' in 'nan' is not finite"),
         (["--k0", "1", "--dt", "0"], "need 0 < --dt <= --t-end"),
-        (["--k0", "1", "--noise-uniform", "-1"], "--noise-uniform must be >= 0"),
+        (
+            ["--k0", "1", "--noise-uniform", "-1"],
+            "--noise-uniform must be from 0 to 1e+148, not -1",
+        ),
         (["--k0", "1", "--cost-plot", "c.png", "--cost-range", "1", "0"], "needs A < B"),
         (["--k0", "1", "--data", "d.csv", "--k", "3"], "--data and --true do not go together"),
         (["--k0", "1", "--data", "missing.csv"], "missing.csv: No such file or directory"),
@@ -325,8 +328,10 @@ def test_fit_warnings_go_to_stderr(capsys):
         (["--filter", "(1+sqrt(-1)*s)^5"], "cannot read 'qrt(-1)*s)^5'"),
         (["--filter", "(1+1e-300*s)^5"], "its leading coefficient underflows to 0"),
         (["--filter", "(1+s)^5", "--filter-T", "2"], "--filter and --filter-T do not go together"),
-        (["--set", "ra=1e400"], "error[out_of_range]: a coefficient of Theta, 1000000"),
-        (["--keep", "ra", "--set", "ra=1e400"], "error[out_of_range]: the value of ra, 10000"),
+        (["--set", "ra=1e400"], "error[out_of_range]: a coefficient of Theta, about 1.000e+401"),
+        (["--keep", "ra", "--set", "ra=1e400"], "the value of ra, about 1.000e+400, is beyond"),
+        # its first 40 digits alone, 1/1000..., read as a number in range
+        (["--keep", "ra", "--set", "ra=1e-400"], "the value of ra, about 1.000e-400, is beyond"),
         (["--signal", "chirp"], "chirp: No such file or directory"),
         (["--signal", "step", "--period", "2"], "--period applies to prbs, square and multisine"),
         (["--columns", "a,b"], "--columns names the columns of --data files"),
@@ -341,6 +346,18 @@ def test_fit_warnings_go_to_stderr(capsys):
         ),
         (["--data", "under.csv"], "under.csv:2: column 'y' holds '1_0', not a number"),
         (["--data", "latin.csv"], "latin.csv: not UTF-8 text"),
+        # in range for Theta, but the simulation overflowed: NaN samples, exit status 0
+        (["--set", "ra=1e300"], "the simulated output overflows at t = 0.01"),
+        # signals and noise too large for floating point (the last two were internal errors,
+        # a CSV file of 1e300 a failure inside LAPACK)
+        (["--amplitude", "1e308"], "u[0] is 1e+308: signals must stay within 1e+150 in size"),
+        (["--data", "huge.csv"], "y[1] is 1e+300: signals must stay within 1e+150 in size"),
+        (["--noise-snr", "-1e4"], "snr_db = -10000 makes noise of standard deviation inf"),
+        (["--noise-uniform", "1.7e308"], "--noise-uniform must be from 0 to 1e+148"),
+        (["--dt", "5e-324"], "--t-end / --dt = inf samples is too many"),  # internal errors,
+        (["--signal", "square", "--period", "1e-308"], "has more than 16777216 periods"),  # too
+        # a LinAlgError from inside LAPACK, its complaints on stderr
+        (["--signal", "prbs", "--beta", "1e18"], "beta = 1e+18 weighs the start of a record"),
     ],
 )
 def test_fit_user_errors_exit_2(args, message, tmp_path, monkeypatch, capsys):
@@ -350,6 +367,7 @@ def test_fit_user_errors_exit_2(args, message, tmp_path, monkeypatch, capsys):
     Path("dup.csv").write_text("t,u,u\n0,1,0\n")
     Path("under.csv").write_text("t,u,y\n0,1,1_0\n")
     Path("latin.csv").write_bytes(b"t,u,y\n0,1,\xe9\n")
+    Path("huge.csv").write_text("t,u,y\n0,1,0\n1,1,1e300\n2,1,0\n")
     status, _, err = mtt(capsys, "fit", DC_DRIVE, *args)
     assert status == 2 and message in err and "Traceback" not in err
 
@@ -404,4 +422,31 @@ def test_a_simulation_that_overflows_is_an_error_not_nan_in_json(capsys, command
     (error,) = json.loads(out)["errors"]
     assert status == 2 and "NaN" not in out and "Infinity" not in out
     assert error["message"].startswith("the simulated output overflows at t = 16.")
-    assert "the model is unstable with c = -0.001; shorten --t-end or choose another --true" in err
+    assert "the model is unstable with c = -0.001, or its values are far from 1" in err
+
+
+def test_figure_labels_in_physical_words_and_a_legend_beside_the_curves(monkeypatch, capsys):
+    # issue 12 item 6: Fig. 5's axes say what the signals are (the model's words for its
+    # source and detector), and Fig. 8's legend is outside the axes, over no curve
+    from mtt.cli import plots
+
+    figures = {}
+    monkeypatch.setattr(plots, "_save", lambda figure, path, dpi: figures.update({path: figure}))
+    status, _, err = mtt(capsys, "estimate", *ABSORBER_DATA, "--k0", "1", "--filter-T", "0.5",
+                         "1", "--data-plot", "fig5.png", "--cost-range", "-1", "1",
+                         "--cost-plot", "fig8.png")  # fmt: skip
+    assert status == 0, err
+    top, bottom = figures["fig5.png"].axes
+    assert top.get_ylabel().replace("\n", " ") == "solute feed flow (Sf:feed)"
+    assert bottom.get_ylabel().replace("\n", " ") == "liquid product concentration (De:x_l)"
+    assert bottom.get_xlabel() == "time t (s)"
+    fig8 = figures["fig8.png"]
+    fig8.canvas.draw()
+    (legend,) = fig8.legends
+    (ax,) = fig8.axes
+    box, frame = legend.get_window_extent(), ax.get_window_extent()
+    assert box.x0 >= frame.x1  # beside the axes, not over them
+    assert [text.get_text() for text in legend.get_texts()][:2] == [
+        "C(s) = (1 + 0.5 s)^4",
+        "C(s) = (1 + s)^4",
+    ]

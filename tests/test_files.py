@@ -104,3 +104,48 @@ def test_draw_to_a_special_file_is_an_error_not_a_crash(tmp_path, capsys):
     os.mkfifo(fifo)
     status, _, err = run(capsys, "draw", RLC, "-o", str(fifo))
     assert status == 2 and "error[io]" in err and "not a regular file" in err
+
+
+def test_a_device_such_as_dev_null_is_refused_and_kept(tmp_path, capsys):
+    # `mtt compile -o /dev/null` as root replaced the device with a regular file: here a
+    # device of the same numbers (1, 3) made in a temporary directory, never the real one
+    device = tmp_path / "null"
+    try:
+        os.mknod(device, 0o666 | stat.S_IFCHR, os.makedev(1, 3))
+    except PermissionError:
+        pytest.skip("making a device needs root")
+    link = tmp_path / "link.py"
+    link.symlink_to(device)
+    for target in (device, link):
+        status, _, err = run(capsys, "compile", RLC, "-o", str(target))
+        assert status == 2 and f"{target}: not a regular file: not replaced" in err
+    status, _, err = run(capsys, "simulate", RLC, "--csv", str(device))
+    assert status == 2 and "not a regular file" in err
+    assert stat.S_ISCHR(os.stat(device).st_mode) and os.stat(device).st_rdev == os.makedev(1, 3)
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["link.py", "null"]  # no temporary
+
+
+@pytest.mark.parametrize(
+    "argv",
+    [
+        ["simulate", RLC, "--csv", ""],
+        ["simulate", RLC, "--data-plot", ""],
+        ["simulate", RLC, "--signal", ""],
+        ["estimate", RLC, "--k0", "1", "--plot", ""],
+        ["estimate", RLC, "--k0", "1", "--cost-plot", ""],
+        ["estimate", RLC, "--k0", "1", "--csv", ""],
+        ["fit", RLC, "--plot", ""],
+        ["fit", RLC, "--csv", ""],
+        ["examples", "--copy", ""],
+    ],
+)
+def test_an_empty_file_name_is_refused_by_every_command(capsys, tmp_path, monkeypatch, argv):
+    # it read as the option not given: `simulate --csv ''` printed the samples instead,
+    # `examples --copy ''` copied into the working directory
+    monkeypatch.chdir(tmp_path)
+    with pytest.raises(SystemExit) as caught:
+        main(argv)
+    flag = argv[argv.index("") - 1]
+    assert caught.value.code == 2
+    assert f"error: argument {flag}: an empty name" in capsys.readouterr().err
+    assert list(tmp_path.iterdir()) == []

@@ -223,6 +223,12 @@ def test_input_signals_and_noise(dc_drive):
         dc_drive.input_signal("chirp", t)
     with pytest.raises(ValueError, match="y is constant"):
         dc_drive.with_noise(np.ones(5), 10.0)
+    for snr in (-1e4, -6200.0):  # a ZeroDivisionError and inf noise
+        with pytest.raises(ValueError, match=f"snr_db = {snr:g} makes noise of standard"):
+            dc_drive.with_noise(np.arange(5.0), snr)
+    assert np.array_equal(dc_drive.with_noise(np.arange(5.0), 1e4), np.arange(5.0))
+    with pytest.raises(ValueError, match=r"y\[2\] is -1e\+200: signals must stay within"):
+        dc_drive.fit(np.arange(4.0), np.ones(4), np.array([0, 1, -1e200, 0]))
 
 
 @pytest.mark.parametrize(
@@ -244,6 +250,9 @@ def test_filter_text(dc_drive, text, expected):
     [
         ("(1+sqrt(-1)*s)^5", r"cannot read 'qrt\(-1\)\*s\)\^5' at character 5"),
         ("(1+s)^400", r"the exponent 400 must be a whole number from 0 to 24"),
+        ("(1+s)^50", r"the exponent 50 must be a whole number from 0 to 24"),
+        ("(1+s)^1e400", r"the exponent inf must be a whole number"),  # was an OverflowError
+        ("(1+s)^2.5", r"the exponent 2.5 must be a whole number"),
         ("(1+1e-300*s)^5", r"its leading coefficient underflows to 0"),
         ("1e300*(1+s)^5*1e300", r"a coefficient overflows"),
         ("(1+s)^5 (", r"expected a number, s or '\(', found the end"),
@@ -316,6 +325,14 @@ def test_the_module_command_line_fits_several_files(dc_drive, tmp_path, capsys):
     status = dc_drive.main(["fit", paths[0]])
     out, err = capsys.readouterr()
     assert status == 2 and "no column 't' (the header names time, volts, speed)" in err
+    # negative numbers are values, not options (argparse took -inf and -1e3 for options)
+    for argv, message in (
+        (["estimate", paths[0], "--k0", "-inf"], "--k0 must be finite, not -inf"),
+        (["fit", paths[0], "--k0", "-1e3", "--bounds", "-1e-3", "-1e3"], "not (-0.001, -1000.0)"),
+    ):
+        status = dc_drive.main([*argv, "--columns", "time,volts,speed"])
+        out, err = capsys.readouterr()
+        assert status == 2 and message in err and "expected one argument" not in err
 
 
 def test_the_module_command_line_fails_in_json_as_mtt_fit_does(dc_drive, tmp_path, capsys):

@@ -14,7 +14,7 @@ from oracle import oracle_tf
 from mtt.derivation.causality import assign
 from mtt.derivation.pipeline import transfer_for
 from mtt.language.diagnostics import ModelError, Position, Source
-from mtt.language.parse import MAX_LINE, parse
+from mtt.language.parse import MAX_LINE, MAX_STATEMENTS, parse
 
 HANG = 1.0  # seconds: every case here ends in a few milliseconds
 
@@ -389,6 +389,39 @@ def test_a_model_file_over_a_megabyte(tmp_path):
     with pytest.raises(ModelError) as caught:
         transfer_for(path)
     assert caught.value.kind == "io" and "larger than" in str(caught.value)
+
+
+def test_a_megabyte_of_comments_and_blank_lines_is_read_at_once():
+    # each line went through lark: 200000 comment lines took 10 s
+    text = model("2") + "# a comment\n" * 60_000 + "\n" * 100_000 + "  \t# indented\r\n" * 20_000
+    start = time.perf_counter()
+    parsed = parse(Source("test.bg", text))
+    assert time.perf_counter() - start < HANG
+    assert [p.name for p in parsed.parameters] == ["c"] and len(parsed.bonds) == 4
+
+
+def test_more_lines_of_statements_than_the_limit(models):
+    # a file under a megabyte of short statements (80000 lines) took 25 s to 120 s
+    text = model("2") + "".join(f"param p{i} = 1\n" for i in range(MAX_STATEMENTS + 100))
+    start = time.perf_counter()
+    problem = models.failure(text)
+    assert time.perf_counter() - start < 5 * HANG  # reading 10000 statements takes some time
+    (error,) = problem.errors  # every line is a statement: the first one over the limit
+    assert (error.kind, error.position.line) == ("too_large", MAX_STATEMENTS + 1)
+    assert f"more than {MAX_STATEMENTS} lines of statements" in error.message
+
+
+def test_many_errors_are_rendered_in_linear_time(models):
+    # each error's source line was found by splitting the whole text again: 8000 errors
+    # about 8000 lines took 10 s to print
+    text = model("2") + "".join(f"R:x{i}(1)\n" for i in range(5000))
+    problem = models.failure(text)
+    assert len(problem.errors) == 5000
+    start = time.perf_counter()
+    rendered = problem.render()
+    assert time.perf_counter() - start < HANG
+    assert rendered.count("error[unconnected_component]") == 5000
+    assert rendered.endswith(" 5006 | R:x4999(1)\n      | ^")
 
 
 def test_roots_in_functions_of_kept_symbols_and_high_order_roots(tmp_path):

@@ -145,6 +145,9 @@ def test_mtt_bode_figure_and_json(tmp_path, capsys):
         (["--k", "1"], "say where the diagram goes"),
         (["--k", "x", "--json"], "expected numbers separated by commas"),
         (["--k", "1,nan", "--json"], "expected finite numbers"),
+        # was an internal error (LinAlgError) after a RuntimeWarning on stderr
+        (["--k", "1e-308", "--json"], "error[out_of_range]: the frequency response for 1e-308"),
+        (["--k", "-1e-320,1", "--json"], "is beyond floating point"),
     ],
 )
 def test_mtt_bode_usage_errors(capsys, argv, says):
@@ -152,7 +155,8 @@ def test_mtt_bode_usage_errors(capsys, argv, says):
         status = main(["bode", str(mtt.example("dc_drive")), *argv])
     except SystemExit as exit:
         status = exit.code
-    assert status == 2 and says in capsys.readouterr().err
+    err = capsys.readouterr().err
+    assert status == 2 and says in err and "Warning" not in err
 
 
 def test_mtt_bode_of_a_zero_transfer_function_is_an_error_without_warnings(tmp_path, capsys):
@@ -196,3 +200,34 @@ def test_subsystems_are_boxes_around_their_components_named_as_in_their_file():
     assert draw._local_label(graph, "feed") == "Sf:feed"
     svg = draw.render(draw.figure(graph), "svg").decode()
     assert ">s1</text>" in svg and ">MSf:liquid</text>" in svg
+
+
+def _png_size(path) -> tuple[int, int]:
+    header = path.read_bytes()[:24]
+    assert header[:8] == b"\x89PNG\r\n\x1a\n"
+    return int.from_bytes(header[16:20], "big"), int.from_bytes(header[20:24], "big")
+
+
+def test_every_command_that_draws_takes_dpi(tmp_path, capsys):
+    # --dpi was an option of simulate, estimate and fit only; draw and bode drew at 150
+    rlc = str(mtt.example("rlc"))
+    for command, extra, inches in (
+        ("draw", [], None),
+        ("bode", [], (7.0, 5.6)),
+        ("simulate", ["--t-end", "1"], None),
+    ):
+        sizes = []
+        for dpi in ("60", "120"):
+            out = tmp_path / f"{command}{dpi}.png"
+            flag = "--data-plot" if command == "simulate" else "-o"
+            status, _, err = run(capsys, command, rlc, flag, str(out), "--dpi", dpi, *extra)
+            assert status == 0, err
+            sizes.append(_png_size(out))
+        low, high = np.array(sizes[0]), np.array(sizes[1])
+        assert np.abs(high - 2 * low).max() <= 1  # the same figure, twice as fine (rounded)
+        if inches:
+            assert sizes[0] == (round(60 * inches[0]), round(60 * inches[1]))
+    for command in ("draw", "bode"):
+        with pytest.raises(SystemExit):
+            main([command, rlc, "-o", str(tmp_path / "x.png"), "--dpi", "5"])
+        assert "--dpi must be from 10 to 2400, not 5" in capsys.readouterr().err

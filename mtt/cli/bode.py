@@ -29,17 +29,28 @@ class Bode:
 
 def bode(systems: Sequence[tuple[float, np.ndarray, np.ndarray]]) -> Bode:
     """The Bode data of (k, num, den) for each value of k (num, den highest power first,
-    without leading zeros)."""
-    grids = [signal.findfreqs(num, den, POINTS) for _, num, den in systems]
-    low = min(float(grid[0]) for grid in grids)
-    high = max(float(grid[-1]) for grid in grids)
-    w = np.logspace(np.log10(low), np.log10(high), POINTS)
-    magnitude, phase = [], []
-    for _, num, den in systems:
-        with np.errstate(divide="ignore"):  # a zero exactly on the grid: -inf dB
-            _, mag, ph = signal.bode((num, den), w)
-        magnitude.append(mag)
-        phase.append(ph)
+    without leading zeros). A ValueError when floating point cannot hold them (coefficients
+    of very different sizes, as for k = 1e-308: the roots overflowed in LAPACK)."""
+    with np.errstate(all="ignore"):
+        try:
+            grids = [signal.findfreqs(num, den, POINTS) for _, num, den in systems]
+            low = min(float(grid[0]) for grid in grids)
+            high = max(float(grid[-1]) for grid in grids)
+            w = np.logspace(np.log10(low), np.log10(high), POINTS)
+            magnitude, phase = [], []
+            for _, num, den in systems:
+                _, mag, ph = signal.bode((num, den), w)
+                magnitude.append(mag)
+                phase.append(ph)
+        except (ValueError, ArithmeticError):  # LinAlgError is a ValueError
+            magnitude = [np.array([np.nan])]
+    # (a zero exactly on the grid is -inf dB, and null in --json)
+    if not (np.all(np.asarray(magnitude) < np.inf) and np.isfinite(w).all() and w[0] > 0):
+        values = ", ".join(f"{k:g}" for k, _, _ in systems)
+        raise ValueError(
+            f"the frequency response for {values} is beyond floating point (the transfer "
+            "function's coefficients differ too much in size): choose values nearer 1"
+        )
     return Bode(tuple(k for k, _, _ in systems), w, np.array(magnitude), np.array(phase))
 
 

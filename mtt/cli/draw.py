@@ -226,14 +226,14 @@ def _draw(ax, bond: BondPicture) -> None:
 _REPRODUCIBLE = {"svg": {"Date": None}, "pdf": {"CreationDate": None}, "png": {}}
 
 
-def render(fig: Figure, format: str) -> bytes:
-    """The figure as svg, png or pdf bytes."""
+def render(fig: Figure, format: str, dpi: float = 150) -> bytes:
+    """The figure as svg, png or pdf bytes (`dpi`: the resolution of a png)."""
     buffer = io.BytesIO()
     with matplotlib.rc_context({"svg.hashsalt": "mtt", "svg.fonttype": "none"}):
-        fig.savefig(buffer, format=format, dpi=150, metadata=_REPRODUCIBLE[format])
+        fig.savefig(buffer, format=format, dpi=dpi, metadata=_REPRODUCIBLE[format])
     return buffer.getvalue()
 
 
-def save(fig: Figure, path: str | Path) -> None:
+def save(fig: Figure, path: str | Path, dpi: float = 150) -> None:
     """Write a figure as the file's suffix says (.svg, .png or .pdf), atomically."""
-    write_atomic(path, render(fig, Path(path).suffix.lstrip(".").lower()))
+    write_atomic(path, render(fig, Path(path).suffix.lstrip(".").lower(), dpi))

@@ -65,9 +65,11 @@ def _signal(module: ModuleType, args) -> tuple[np.ndarray, np.ndarray, str]:
     dt = DEFAULT_DT if args.dt is None else args.dt
     if not (0 < dt <= t_end < np.inf):
         raise UsageError(f"need 0 < --dt <= --t-end, not --dt {dt} and --t-end {t_end}")
+    if not t_end / dt < MAX_SAMPLES:  # inf for --dt 5e-324: round() raised OverflowError
+        raise UsageError(
+            f"--t-end / --dt = {t_end / dt:.3g} samples is too many (at most {MAX_SAMPLES})"
+        )
     count = max(1, round(t_end / dt))
-    if count >= MAX_SAMPLES:
-        raise UsageError(f"--t-end / --dt = {count} samples is too many (at most {MAX_SAMPLES})")
     if kind == "step" and args.period is not None:
         raise UsageError("--period applies to prbs, square and multisine, not to a step")
     t = np.linspace(0.0, t_end, count + 1)
@@ -123,19 +125,16 @@ def experiment_data(module: ModuleType, args, several: bool = False) -> list[Dat
         )
     clean = module.simulate(t, u, k, hold=args.hold)
     named = unknowns.named(module, k, "g")
-    if not np.isfinite(clean).all():  # not NaN and Infinity in CSV and (invalid) JSON
-        when = t[np.argmin(np.isfinite(clean))]
-        raise UsageError(
-            f"the simulated output overflows at t = {when:g}: the model is unstable with "
-            f"{named}; shorten --t-end or choose another --true"
-        )
+    _finite(clean, t, named)
     seed = DEFAULT_SEED if args.seed is None else args.seed
     note = f"{t.size} samples simulated with {named}, input {source}"
     y = clean
     if args.noise_uniform:
         noise = args.noise_uniform
-        if not 0 <= noise < np.inf:
-            raise UsageError(f"--noise-uniform must be >= 0, not {noise}")
+        if not 0 <= noise <= module.MAX_SIGNAL / 100:
+            raise UsageError(
+                f"--noise-uniform must be from 0 to {module.MAX_SIGNAL / 100:g}, not {noise:g}"
+            )
         y = clean + np.random.default_rng(seed).uniform(-noise, noise, clean.size)
         note += f", noise uniform in [-{noise:g}, {noise:g}] (seed {seed})"
     elif args.noise_snr is not None:
@@ -144,6 +143,19 @@ def experiment_data(module: ModuleType, args, several: bool = False) -> list[Dat
         y = module.with_noise(clean, args.noise_snr, seed=seed)
         note += f", white Gaussian noise at {args.noise_snr:g} dB SNR (seed {seed})"
     return [Data(t, u, y, clean, k, note)]
+
+
+def _finite(y: np.ndarray, t: np.ndarray, named: str) -> None:
+    """Refuse a simulation that left floating point (NaN or inf samples were written as
+    data, with exit status 0; NaN and Infinity made invalid JSON); the noise added after
+    is bounded."""
+    bad = np.flatnonzero(~np.isfinite(y))
+    if bad.size:
+        raise UsageError(
+            f"the simulated output overflows at t = {t[bad[0]]:g}: the model is unstable with "
+            f"{named}, or its values are far from 1; shorten --t-end, choose another --true, "
+            "or give the parameters, the input and the noise in units nearer 1"
+        )
 
 
 def _columns(text: str | None) -> tuple[str, str, str]:

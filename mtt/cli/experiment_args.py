@@ -11,7 +11,7 @@ import argparse
 from collections.abc import Callable
 
 from mtt.cli import batch
-from mtt.cli.options import BoundsAction, add_parameter_options, named_values
+from mtt.cli.options import BoundsAction, add_parameter_options, given, named_values
 
 DEFAULT_T_END, DEFAULT_DT, DEFAULT_SEED = 10.0, 0.01, 0
 
@@ -49,6 +49,7 @@ def _data_options(parser: argparse.ArgumentParser, measured: bool) -> None:
         )
     group.add_argument(
         "--signal",
+        type=given,
         metavar="KIND|FILE.csv",
         help="the simulated input: step (default, from t = 0), prbs, square, multisine, or a "
         "CSV file with columns t,u",
@@ -91,7 +92,7 @@ def _data_options(parser: argparse.ArgumentParser, measured: bool) -> None:
         default="linear",
         help="how the input varies between samples (default linear; zoh: held, as from a DAC)",
     )
-    group.add_argument("--data-plot", metavar="FILE.png", help="plot input and output")
+    group.add_argument("--data-plot", type=given, metavar="FILE.png", help="plot input and output")
     group.add_argument(
         "--dpi", type=float, default=120.0, help="resolution of the figures (default 120)"
     )
@@ -145,7 +146,7 @@ def register(commands) -> None:
     simulate.add_argument("file", metavar="FILE")
     add_parameter_options(simulate)
     _data_options(simulate, measured=False)
-    simulate.add_argument("--csv", metavar="FILE", help="write the samples (t,u,y)")
+    simulate.add_argument("--csv", type=given, metavar="FILE", help="write the samples (t,u,y)")
     simulate.add_argument(
         "--json", action="store_true", help="print the samples as JSON arrays t, u, y"
     )
@@ -201,12 +202,16 @@ def register(commands) -> None:
     group.add_argument("--rtol", type=float, default=1e-6, help="the ODE's relative tolerance")
     group.add_argument("--atol", type=float, default=1e-9, help="the ODE's absolute tolerance")
     outputs = estimate.add_argument_group("outputs")
-    outputs.add_argument("--plot", metavar="FILE.png", help="plot the estimates against time")
-    outputs.add_argument("--cost-plot", metavar="FILE.png", help="plot the cost at the end")
+    outputs.add_argument(
+        "--plot", type=given, metavar="FILE.png", help="plot the estimates against time"
+    )
+    outputs.add_argument(
+        "--cost-plot", type=given, metavar="FILE.png", help="plot the cost at the end"
+    )
     outputs.add_argument(
         "--cost-range", type=float, nargs=2, metavar=("A", "B"), help="k range of --cost-plot"
     )
-    outputs.add_argument("--csv", metavar="FILE", help="write the trajectories as CSV")
+    outputs.add_argument("--csv", type=given, metavar="FILE", help="write the trajectories as CSV")
     outputs.add_argument("--json", action="store_true", help="print the results as JSON")
     estimate.set_defaults(run=_implementation("cmd_estimate", "estimating"))
 
@@ -259,10 +264,14 @@ def register(commands) -> None:
     group.add_argument("--beta", type=float, default=0.0, help="forgetting factor (default 0)")
     outputs = fit.add_argument_group("outputs")
     outputs.add_argument(
-        "--plot", metavar="FILE.png", help="plot measured and simulated output and the residuals"
+        "--plot",
+        type=given,
+        metavar="FILE.png",
+        help="plot measured and simulated output and the residuals",
     )
     outputs.add_argument(
         "--csv",
+        type=given,
         metavar="FILE",
         help="write t, u, y, the fitted output and the residual (per record: the table)",
     )

@@ -17,6 +17,7 @@ from typing import TYPE_CHECKING
 from mtt import __version__
 from mtt.cli import experiment_args, identify, views
 from mtt.cli.options import (
+    Parser,
     add_parameter_options,
     add_selection_options,
     choice_from_args,
@@ -50,8 +51,9 @@ class UsageExit(SystemExit):
         self.message = message
 
 
-class _Parser(argparse.ArgumentParser):
-    """argparse's parser (its subcommands' too), exiting with a `UsageExit`."""
+class _Parser(Parser):
+    """mtt's parser (its subcommands' too: negative numbers are values), exiting with a
+    `UsageExit`."""
 
     def error(self, message: str):
         self.print_usage(sys.stderr)

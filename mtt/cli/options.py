@@ -7,6 +7,7 @@ building the `mtt` parser stays fast.
 from __future__ import annotations
 
 import argparse
+import re
 from types import MappingProxyType
 from typing import TYPE_CHECKING
 
@@ -15,6 +16,28 @@ if TYPE_CHECKING:
 
     from mtt.derivation.parameters import ParameterChoice
     from mtt.language.bondgraph import Selection
+
+
+# argparse takes an argument that starts with "-" for an option unless it looks like a
+# negative number, which to Python 3.11's argparse -1e-3, -inf and -1:0 do not (`--k0 -inf`
+# said "expected one argument"). No option of mtt starts with a digit, ".", inf or nan.
+NEGATIVE_NUMBER = re.compile(r"-(?:\.?\d|inf|nan)", re.IGNORECASE)
+
+
+class Parser(argparse.ArgumentParser):
+    """An ArgumentParser (its subcommands' too) that reads every negative number as a value."""
+
+    def __init__(self, *args, **kwargs):
+        super().__init__(*args, **kwargs)
+        self._negative_number_matcher = NEGATIVE_NUMBER
+
+
+def given(text: str) -> str:
+    """A file or directory named on the command line: an empty name is refused (it read as
+    an option not given: `--csv ''` wrote nothing, `--copy ''` copied into '.')."""
+    if not text:
+        raise argparse.ArgumentTypeError("an empty name")
+    return text
 
 
 def _is_name(text: str) -> bool:

@@ -14,6 +14,7 @@ from mtt.cli.options import (
     add_parameter_options,
     add_selection_options,
     choice_from_args,
+    given,
     selection_from_args,
 )
 from mtt.language.diagnostics import ModelError, MttError
@@ -55,12 +56,23 @@ def _finite(array) -> list:
     return np.where(np.isfinite(array), array, None).tolist()
 
 
-def _save(figure, path: str) -> None:
+def _dpi(text: str) -> float:
+    """--dpi, as the other commands that draw take it."""
+    try:
+        dpi = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a number, not {text!r}") from None
+    if not 10 <= dpi <= 2400:  # also refuses nan
+        raise argparse.ArgumentTypeError(f"--dpi must be from 10 to 2400, not {text}")
+    return dpi
+
+
+def _save(figure, path: str, dpi: float) -> None:
     """Write a picture; a path that cannot be written is the user's error, said as such."""
     from mtt.cli import draw
 
     try:
-        draw.save(figure, path)
+        draw.save(figure, path, dpi)
     except OSError as exc:
         raise MttError(f"{exc.filename or path}: {exc.strerror}", kind="io") from None
 
@@ -78,7 +90,7 @@ def cmd_draw(args) -> int:
         problem = exc
         print(exc.render(), file=sys.stderr)
         print(f"mtt draw: warning: drawn without causal strokes ({exc.kind})", file=sys.stderr)
-    _save(draw.figure(graph, causal), args.out)
+    _save(draw.figure(graph, causal), args.out, args.dpi)
     if args.json:
         _print_json(
             {"ok": True, "file": args.file, "out": args.out, "model": graph.name,
@@ -118,10 +130,13 @@ def cmd_bode(args) -> int:
             at = f" at {unknown} = {k:g}" if unknown else ""
             raise MttError(f"G(s) is zero{at}: there is no Bode diagram", kind="bad_value")
         systems.append((float(k) if unknown else float("nan"), num, den))
-    data = bode.bode(systems)
+    try:
+        data = bode.bode(systems)
+    except ValueError as exc:
+        raise MttError(str(exc), kind="out_of_range") from None
     if args.out:
         title = f"{model.name}: Bode diagram from {model.input} to {model.output}"
-        _save(bode.figure(data, unknown=unknown or "k", title=title), args.out)
+        _save(bode.figure(data, unknown=unknown or "k", title=title), args.out, args.dpi)
     if args.json:
         _print_json(
             {"ok": True, "file": args.file, "out": args.out, "model": model.name,
@@ -189,6 +204,8 @@ def register(commands) -> None:
     draw.add_argument("file", metavar="FILE")
     draw.add_argument("-o", "--out", required=True, type=_figure_path,
                       metavar="FILE.svg|png|pdf", help="the picture to write")  # fmt: skip
+    draw.add_argument("--dpi", type=_dpi, default=150.0,
+                      help="resolution of a .png (default 150)")  # fmt: skip
     add_selection_options(draw)
     draw.add_argument("--json", action="store_true", help="print one JSON object")
     draw.set_defaults(run=cmd_draw)
@@ -204,6 +221,8 @@ def register(commands) -> None:
                       help="values of the unknown (default: the model file's)")  # fmt: skip
     bode.add_argument("-o", "--out", type=_figure_path, metavar="FILE.svg|png|pdf",
                       help="the figure to write")  # fmt: skip
+    bode.add_argument("--dpi", type=_dpi, default=150.0,
+                      help="resolution of a .png (default 150)")  # fmt: skip
     add_parameter_options(bode)
     bode.add_argument("--json", action="store_true",
                       help="print the frequencies, magnitudes and phases as JSON")  # fmt: skip
@@ -215,7 +234,9 @@ def register(commands) -> None:
         description="List the example models shipped with mtt (the paper's DC drive and "
         "absorber among them), or copy them all to a directory to start from.",
     )
-    examples.add_argument("--copy", metavar="DIR", help="copy every example model into DIR")
+    examples.add_argument(
+        "--copy", type=given, metavar="DIR", help="copy every example model into DIR"
+    )
     examples.add_argument("--force", action="store_true", help="replace files that differ")
     examples.add_argument("--json", action="store_true", help="print one JSON object")
     examples.set_defaults(run=cmd_examples)

@@ -149,6 +149,12 @@ def _wrapped(label: str, polynomial: sympy.Expr) -> str:
     return "\n        ".join(lines)
 
 
+def _magnitude(value: sympy.Expr) -> str:
+    """A number far outside floating point by its leading digits and exponent (its first
+    digits alone, 1000... for 10^400 or 1/1000... for 10^-400, read as in range)."""
+    return sympy.sstr(sympy.N(value, 4))
+
+
 def _in_range(theta: Theta, value: sympy.Expr, name: str | None = None) -> sympy.Expr:
     """value (of the parameter `name`, or else a coefficient of Theta), unless the module's
     floating point cannot hold it (it would overflow to inf or vanish): then an error."""
@@ -161,7 +167,7 @@ def _in_range(theta: Theta, value: sympy.Expr, name: str | None = None) -> sympy
         raise _fail(
             theta,
             "out_of_range",
-            f"{what}, {sympy.sstr(value)[:40]}, is beyond the floating-point "
+            f"{what}, about {_magnitude(value)}, is beyond the floating-point "
             "range (about 1e-308 to 1e308) that the estimator computes in; give the parameters "
             "values in units nearer 1",
         )

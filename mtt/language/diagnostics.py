@@ -13,6 +13,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field, replace
 from enum import Enum
+from functools import cached_property
 
 
 class Severity(Enum):
@@ -27,10 +28,16 @@ class Source:
     name: str
     text: str = field(repr=False)
 
+    @cached_property
+    def lines(self) -> list[str]:
+        """The text's lines, split once (a diagnostic per line of a long file would
+        otherwise split the whole text each time). Lines end at "\\n" only, as the parser
+        counts them (splitlines would also split at form feeds and Unicode line separators
+        inside descriptions)."""
+        return self.text.split("\n")
+
     def line(self, number: int) -> str:
-        # Lines end at "\n" only, as the parser counts them (splitlines would also
-        # split at form feeds and Unicode line separators inside descriptions).
-        lines = self.text.split("\n")
+        lines = self.lines
         return lines[number - 1].removesuffix("\r") if 0 < number <= len(lines) else ""
 
     def render(self, diagnostic: Diagnostic) -> str:

@@ -10,6 +10,7 @@ reaches eval, exec, sympify or parse_expr, and this stage does not import sympy.
 
 from __future__ import annotations
 
+import re
 from dataclasses import dataclass
 from functools import cache
 from typing import TYPE_CHECKING
@@ -30,6 +31,10 @@ __all__ = ["LAPLACE", "MAX_DIGITS", "RESERVED", "Expression", "NameUse", "Signal
 MAX_SYNTAX_ERRORS = 50
 MAX_LINE = 10_000  # characters: lark reads some 100000 a second
 MAX_BONDS = 5_000  # in a model, subsystems included: the derivation's work grows with them
+# lines of statements in a file: lark takes about 0.1 ms a line, so that a file of a megabyte
+# (some 80000 short lines) took 10 to 100 s; blank lines and comments do not count
+MAX_STATEMENTS = 2 * MAX_BONDS
+_BLANK = re.compile(r"[ \t\f\r\ufeff]*(?:#.*)?")  # what the grammar ignores: no statement
 
 
 @dataclass(frozen=True)
@@ -277,9 +282,18 @@ def _statements(source: Source) -> tuple[list, list[Diagnostic]]:
     parser = _parser()
     statements: list = []
     problems: list[Diagnostic] = []
-    bonds = 0
-    for number, line in enumerate(source.text.split("\n"), start=1):
+    bonds = lines = 0
+    for number, line in enumerate(source.lines, start=1):
         if len(problems) >= MAX_SYNTAX_ERRORS:
+            break
+        if _BLANK.fullmatch(line):  # blank or a comment: the parser would find nothing
+            continue
+        lines += 1
+        if lines > MAX_STATEMENTS:
+            message = (
+                f"more than {MAX_STATEMENTS} lines of statements (a limit): the rest is not read"
+            )
+            problems.append(error("too_large", message, Position(number, 1)))
             break
         if len(line) > MAX_LINE:
             problems.append(
