@@ -3242,15 +3242,15 @@ def _finish(Theta, records, shapes, k, coefficients, *, method, c, iterations, b
                 "direction there): the data do not determine the unknowns"
             )
         none = math.nan if SCALAR else np.full(len(UNKNOWNS), math.nan)
-        return _unvalidated(shapes, keep, 0.0, k=none, k_se=math.inf, ok=False, message=message,
-                            warnings=tuple(found_), **common)  # fmt: skip
+        return _unvalidated(shapes, keep, 0.0, none, math.inf,
+                            dict(ok=False, message=message, warnings=tuple(found_), **common))  # fmt: skip
     if not uncertainty:  # the estimate alone, for speed: many records, or every few samples
         found_ += _box_warnings(k, bounds, found)
         message = (f"{method}: {_named_point(k)} (uncertainty=False: no standard error, no "
                    "validation)")  # fmt: skip
         offset = math.nan if settings["offset"] else 0.0  # (estimated in the validation)
-        return _unvalidated(shapes, keep, offset, k=k, k_se=math.nan, ok=True, message=message,
-                            warnings=tuple(found_), **common)  # fmt: skip
+        return _unvalidated(shapes, keep, offset, k, math.nan,
+                            dict(ok=True, message=message, warnings=tuple(found_), **common))  # fmt: skip
     with np.errstate(all="ignore"):
         parts = records.validate(Theta, k, method, c, beta, settings, keep)
         count = sum(shape.samples for shape in shapes)
@@ -3395,7 +3395,7 @@ def _box_warnings(k, bounds, found) -> list[str]:
     return said
 
 
-def _unvalidated(shapes, keep: bool, offset: float, *, k, k_se: float, **fields) -> Fit:
+def _unvalidated(shapes, keep: bool, offset: float, k, k_se: float, fields: dict) -> Fit:
     """A Fit without validation: no estimate (k NaN, k_se inf, offsets 0), or
     uncertainty=False (k alone; k_se and the fit measures NaN, the offsets too if they were
     to be estimated)."""

@@ -56,7 +56,8 @@ def test_times_out_of_scale_are_clear_errors(dc_drive, scale, options, message):
 def test_values_out_of_range_are_clear_errors(dc_drive, tmp_path, capsys):
     t, u, y = prbs_record(dc_drive, 10.0, 20.0)
     for arguments, message in [
-        ((t, u, y * 1e200), r"^y reaches at most 9\.09e\+199 in magnitude: .* would overflow"),
+        ((t, u, y * 1e120), r"^y reaches at most 9\.09e\+119 in magnitude: .* would overflow"),
+        ((t, u, y * 1e200), r"^y\[767\] is 9\.09402e\+199: signals must stay within 1e\+150"),
         ((t, u * 1e-200, y), r"^u reaches at most 1e-200 in magnitude: .* would underflow"),
         (([t, t], [u, u], [y, y * 1e-300]), r"^y\[1\] reaches at most 9\.09e-301 in magnitude"),
     ]:

@@ -39,7 +39,7 @@ from mtt.resources import resource_dir
 RESERVED = frozenset(
     {"t", "u", "y", "k", "k0", "beta", "S0", "C", "hold", "method", "rtol", "atol"}
     | {"max_step", "progress", "engine", "bounds", "self", "known", "offset", "initial_state"}
-    | {"records", "keep", "fraction"}  # fit_records, prior_weight
+    | {"records", "keep", "fraction", "uncertainty"}  # fit_records, prior_weight, fit
 )
 # Run by the interpreter at start-up wherever they are on its path (as are a package's
 # __init__ and __main__: every __dunder__ name is refused too).
