@@ -3496,6 +3496,14 @@ _NUMBER = re.compile(r"[+-]?(?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d+)?")
 # argparse takes "-1e-3", "-inf" or "-1:0" for an option (it knows only -1 and -.5 as
 # numbers): they are values here, as no option starts with a digit, ".", inf or nan
 _NEGATIVE_NUMBER = re.compile(r"-(?:\.?\d|inf|nan)", re.IGNORECASE)
+# the functions' advice names their arguments (hold='zoh'); here it names the options
+_COMMAND_LINE_ADVICE = (('offset=False, initial_state=False', '--no-offset --no-initial-state'), ("hold='zoh'", '--hold zoh'), ("hold='linear'", '--hold linear'), ("C='auto'", '--filter auto'), ("method='iv'", '--method iv'), ("engine='ode'", '--engine ode'), ("engine='moments'", '--engine moments'), ('bounds=(lo, hi)', '--bounds LO:HI'), ('with bounds=', 'with --bounds'), ('lower S0 (prior_weight sets one', 'lower --S0 (--S0-relative sets one'))
+
+
+def _for_command_line(text: str) -> str:
+    for python, option in _COMMAND_LINE_ADVICE:
+        text = text.replace(python, option)
+    return text
 
 
 def read_csv(path, columns: tuple[str, ...] = ("t", "u", "y")) -> tuple[np.ndarray, ...]:
@@ -3733,11 +3741,11 @@ def main(argv: list[str] | None = None) -> int:
             run = _fit_main if args.command == "fit" else _estimate_main
             record, lines, status = run(args, known)
     except (OSError, ValueError) as error:
-        text = error
+        text = _for_command_line(str(error))
         if isinstance(error, OSError) and error.filename:
             text = f"{error.filename}: {error.strerror}"
         if args.json:  # the record of `mtt fit/estimate --json` when they fail
-            record = dict(file=None, kind="usage", line=None, column=None, message=str(text),
+            record = dict(file=None, kind="usage", line=None, column=None, message=text,
                           notes=[])  # fmt: skip
             print(json.dumps(dict(ok=False, model=MODEL, unknown=UNKNOWN, unknowns=list(UNKNOWNS),
                                   errors=[record])))  # fmt: skip
@@ -3745,10 +3753,10 @@ def main(argv: list[str] | None = None) -> int:
         return 2
     for warning in caught:
         if issubclass(warning.category, EstimationWarning):
-            print(f"{prog}: warning: {warning.message}", file=sys.stderr)
+            print(f"{prog}: warning: {_for_command_line(str(warning.message))}", file=sys.stderr)
     try:
-        print(json.dumps(dict(model=MODEL, unknown=UNKNOWN, **record)) if args.json
-              else "\n".join(lines))  # fmt: skip
+        print(_for_command_line(json.dumps(dict(model=MODEL, unknown=UNKNOWN, **record))
+                                if args.json else "\n".join(lines)))  # fmt: skip
         sys.stdout.flush()
     except BrokenPipeError:  # `... | head`: the reader had enough; Python's flush at exit
         os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())  # would fail again

@@ -450,3 +450,29 @@ def test_figure_labels_in_physical_words_and_a_legend_beside_the_curves(monkeypa
         "C(s) = (1 + 0.5 s)^4",
         "C(s) = (1 + s)^4",
     ]
+
+
+def test_advice_names_the_options_and_held_test_signals_are_held(capsys, tmp_path):
+    """On a command line the estimators' advice names options (--hold zoh), not the Python
+    arguments (hold='zoh'); a simulated PRBS is held by default, so fitting it does not
+    warn that it looks held, while its CSV, read back as measured data, does."""
+    status, _, err = mtt(capsys, "fit", DC_DRIVE, "--signal", "prbs", "--t-end", "40",
+                         "--noise-snr", "30")  # fmt: skip
+    assert status == 0 and "looks held" not in err
+    data = str(tmp_path / "prbs.csv")
+    assert mtt(capsys, "simulate", DC_DRIVE, "--signal", "prbs", "--t-end", "40", "--csv",
+               data)[0] == 0  # fmt: skip
+    status, out, err = mtt(capsys, "fit", DC_DRIVE, "--data", data, "--json")
+    advice = "pass --hold zoh; --hold linear reads each jump as a ramp"
+    assert status == 0 and advice in err and "hold='" not in err
+    assert any(advice in text for text in json.loads(out)["warnings"])
+    import importlib.util
+
+    spec = importlib.util.spec_from_file_location(
+        "dc_drive_cli", ROOT / "generated" / "dc_drive.py"
+    )
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    assert module.main(["fit", data]) == 0
+    err = capsys.readouterr().err
+    assert advice in err and "hold='" not in err

@@ -72,7 +72,14 @@ def mode(args) -> str | None:
 
 def cmd_fit_many(args, kind: str) -> int:
     from mtt.batch import api
-    from mtt.cli.experiment import EXIT_OK, EXIT_STOPPED, UsageError, _columns, checked_module
+    from mtt.cli.experiment import (
+        EXIT_OK,
+        EXIT_STOPPED,
+        UsageError,
+        _columns,
+        checked_module,
+        say,
+    )
     from mtt.cli.fitting import options
     from mtt.cli.options import choice_from_args
     from mtt.derivation import pipeline
@@ -108,14 +115,14 @@ def cmd_fit_many(args, kind: str) -> int:
     if kind == "pooled":
         return _pooled(module, args, batch, errors)
     for error in errors:  # one line each, naming the record
-        print(f"mtt fit: error: {error}", file=sys.stderr)
+        say(f"mtt fit: error: {error}", stderr=True)
     _warnings(batch)
     if args.csv:
         codegen.write_atomic(args.csv, _table_csv(module, batch))
     if args.json:
-        print(json.dumps({"ok": batch.ok, "records": [o.record() for o in batch]}))
+        say(json.dumps({"ok": batch.ok, "records": [o.record() for o in batch]}))
     else:
-        print(_table(module, args, batch))
+        say(_table(module, args, batch))
     return EXIT_OK if batch.ok else EXIT_STOPPED
 
 
@@ -162,12 +169,12 @@ def _named(outcome) -> str:
 
 
 def _pooled(module, args, batch, errors: list[str]) -> int:
-    from mtt.cli.experiment import EXIT_OK, EXIT_STOPPED, UsageError, warn
+    from mtt.cli.experiment import EXIT_OK, EXIT_STOPPED, UsageError, say, warn
     from mtt.cli.fitting import _text
 
     if errors:  # as in this process: a bad record is the error (named, also in --json)
         for error in errors[1:]:
-            print(f"mtt fit: error: {error}", file=sys.stderr)
+            say(f"mtt fit: error: {error}", stderr=True)
         more = f" ({len(errors)} of {len(batch)} records could not be read)"
         raise UsageError(errors[0] + (more if len(errors) > 1 else ""))
     if batch.pooled is None:
@@ -178,9 +185,9 @@ def _pooled(module, args, batch, errors: list[str]) -> int:
     if args.json:
         record = {"model": module.MODEL, "unknown": module.UNKNOWN, **module.fit_record(result)}
         record["data"] = notes
-        print(json.dumps(record))
+        say(json.dumps(record))
     else:
-        print(_text(module, [argparse.Namespace(note=note) for note in notes], result))
+        say(_text(module, [argparse.Namespace(note=note) for note in notes], result))
     return EXIT_OK if result.ok else EXIT_STOPPED
 
 

@@ -27,6 +27,8 @@ from mtt.cli.experiment import (
     _model,
     _rows,
     experiment_data,
+    hold_of,
+    say,
     signal_label,
     warn,
 )
@@ -58,7 +60,7 @@ def _filters(module: ModuleType, args) -> list[tuple[str, object]]:
 def run_all(module: ModuleType, data: Data, args) -> list[Run]:
     """One estimate per filter and starting value, with a progress bar on a terminal."""
     filters = _filters(module, args)
-    options = dict(beta=args.beta, S0=args.S0, hold=args.hold, engine=args.engine,
+    options = dict(beta=args.beta, S0=args.S0, hold=hold_of(args), engine=args.engine,
                    bounds=unknowns.bounds(module, args.bounds), rtol=args.rtol,
                    atol=args.atol)  # fmt: skip
     starts = [unknowns.point(module, k0, "--k0") for k0 in args.k0]
@@ -79,7 +81,7 @@ def run_all(module: ModuleType, data: Data, args) -> list[Run]:
                 if args.S0_relative is not None:
                     options["S0"] = module.prior_weight(
                         data.t, data.u, data.y, k0=k0, fraction=args.S0_relative, C=C,
-                        hold=args.hold,
+                        hold=hold_of(args),
                     )  # fmt: skip
                 result = module.estimate(
                     data.t, data.u, data.y, k0=k0, C=C, **options,
@@ -176,13 +178,13 @@ def cmd_estimate(args) -> int:
     for run in runs:
         for kind, text in _notes(module, run):
             start = f"k0 = {unknowns.text(module, run.k0)}" if several else _start(module, run)
-            print(f"mtt estimate: {kind}: {start}, C(s) = {run.filter}: {text}", file=sys.stderr)
+            say(f"mtt estimate: {kind}: {start}, C(s) = {run.filter}: {text}", stderr=True)
     for text in dict.fromkeys(text for run in runs for text in run.result.warnings):
         warn("estimate", [text])
     if args.json:
-        print(json.dumps(_record(module, runs)))
+        say(json.dumps(_record(module, runs)))
     else:
-        print(_table(module, data, runs))
+        say(_table(module, data, runs))
     return EXIT_OK if all(run.result.ok for run in runs) else EXIT_STOPPED
 
 
@@ -195,7 +197,7 @@ def _band(module: ModuleType, data: Data, run: Run, args) -> np.ndarray | None:
     if not result.ok or len(module.UNKNOWNS) > 1:
         return None
     final = module.fit(data.t, data.u, data.y, method="ls", C=result.filter, beta=args.beta,
-                       hold=args.hold, offset=False, initial_state=False)  # fmt: skip
+                       hold=hold_of(args), offset=False, initial_state=False)  # fmt: skip
     if not np.isfinite(final.k_se):
         return None
     J2 = result.J[0]

@@ -24,6 +24,7 @@ from mtt.cli.experiment_args import DEFAULT_DT, DEFAULT_SEED, DEFAULT_T_END
 from mtt.cli.options import choice_from_args
 from mtt.derivation import pipeline
 from mtt.estimator import codegen
+from mtt.estimator.advice import for_command_line
 
 EXIT_OK, EXIT_STOPPED, EXIT_USAGE = 0, 1, 2
 MAX_SAMPLES = 10**7
@@ -84,6 +85,18 @@ def _signal(module: ModuleType, args) -> tuple[np.ndarray, np.ndarray, str]:
     return t, u, described
 
 
+HELD_SIGNALS = ("step", "prbs", "square")  # piecewise constant between their samples
+
+
+def hold_of(args) -> str:
+    """--hold, or its default: zoh for a test signal that is held by construction (the fit
+    of a simulated PRBS must not read its jumps as ramps), linear for measured data."""
+    if args.hold is not None:
+        return args.hold
+    simulated = not getattr(args, "data", None) and (args.signal or "step") in HELD_SIGNALS
+    return "zoh" if simulated else "linear"
+
+
 def experiment_data(module: ModuleType, args, several: bool = False) -> list[Data]:
     """Measured data (each --data), or a simulation of the model with the chosen input and
     noise: one record unless `several` (fit) allows more."""
@@ -123,7 +136,7 @@ def experiment_data(module: ModuleType, args, several: bool = False) -> list[Dat
         raise UsageError(
             f"the model gives no value of {', '.join(k)} to simulate with: pass --true {example}"
         )
-    clean = module.simulate(t, u, k, hold=args.hold)
+    clean = module.simulate(t, u, k, hold=hold_of(args))
     named = unknowns.named(module, k, "g")
     _finite(clean, t, named)
     seed = DEFAULT_SEED if args.seed is None else args.seed
@@ -206,7 +219,7 @@ def guarded(action: Callable[[argparse.Namespace], int]) -> Callable[[argparse.N
                 status = action(args)
             for warning in caught:
                 if not _handled(warning.category):
-                    print(f"mtt {args.command}: warning: {warning.message}", file=sys.stderr)
+                    say(f"mtt {args.command}: warning: {warning.message}", stderr=True)
             return status
         except (UsageError, ValueError) as exc:
             message = str(exc)
@@ -214,6 +227,7 @@ def guarded(action: Callable[[argparse.Namespace], int]) -> Callable[[argparse.N
             raise
         except OSError as exc:
             message = f"{exc.filename}: {exc.strerror}" if exc.filename else str(exc)
+        message = for_command_line(message)
         print(f"mtt {args.command}: error: {message}", file=sys.stderr)
         if getattr(args, "json", False):
             error = {"file": getattr(args, "file", None), "kind": "usage", "line": None,
@@ -242,9 +256,15 @@ def signal_label(module: ModuleType, role: str) -> str:
     return f"{role}: {quantity} {where} {name} ({label})"
 
 
+def say(text: str, *, stderr: bool = False) -> None:
+    """Print a result or a note, the estimators' advice named as this command line's options
+    (`hold='zoh'` is `--hold zoh` here)."""
+    print(for_command_line(text), file=sys.stderr if stderr else sys.stdout)
+
+
 def warn(command: str, texts) -> None:
     for text in texts:
-        print(f"mtt {command}: warning: {text}", file=sys.stderr)
+        say(f"mtt {command}: warning: {text}", stderr=True)
 
 
 def cmd_compile(args) -> int:

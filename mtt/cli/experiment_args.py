@@ -89,8 +89,8 @@ def _data_options(parser: argparse.ArgumentParser, measured: bool) -> None:
     group.add_argument(
         "--hold",
         choices=("linear", "zoh"),
-        default="linear",
-        help="how the input varies between samples (default linear; zoh: held, as from a DAC)",
+        help="how the input varies between samples: linear, or zoh (held, as from a DAC); "
+        "default zoh for a simulated step, prbs or square (held by construction), else linear",
     )
     group.add_argument("--data-plot", type=given, metavar="FILE.png", help="plot input and output")
     group.add_argument(
@@ -195,9 +195,9 @@ def register(commands) -> None:
         action=BoundsAction,
         nargs="+",
         metavar="LO:HI|NAME=LO:HI,...",
-        help="look for the global minimum of J within LO:HI (also LO HI; --bounds=-1:1 for a "
-        "negative LO); several unknowns: each by name, the others within a factor 10 of the "
-        "file's value (default: everywhere; several unknowns: that box)",
+        help="look for the global minimum of J within LO:HI (also LO HI); several unknowns: "
+        "each by name, the others within a factor 10 of the file's value (default: everywhere; "
+        "several unknowns: that box)",
     )
     group.add_argument("--rtol", type=float, default=1e-6, help="the ODE's relative tolerance")
     group.add_argument("--atol", type=float, default=1e-9, help="the ODE's absolute tolerance")

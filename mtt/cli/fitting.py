@@ -20,6 +20,8 @@ from mtt.cli.experiment import (
     _csv_text,
     _model,
     experiment_data,
+    hold_of,
+    say,
     signal_label,
     warn,
 )
@@ -32,7 +34,7 @@ def options(module, args) -> dict:
         method=args.method, C=_filter(args),
         k0=None if args.k0 is None else unknowns.point(module, args.k0, "--k0"),
         bounds=unknowns.bounds(module, args.bounds), offset=args.offset,
-        initial_state=args.initial_state, hold=args.hold, beta=args.beta,
+        initial_state=args.initial_state, hold=hold_of(args), beta=args.beta,
     )  # fmt: skip
 
 
@@ -88,9 +90,9 @@ def cmd_fit(args) -> int:
     if args.json:
         record = {"model": module.MODEL, "unknown": module.UNKNOWN, **module.fit_record(result)}
         record["data"] = [data.note for data in records]
-        print(json.dumps(record))
+        say(json.dumps(record))
     else:
-        print(_text(module, records, result))
+        say(_text(module, records, result))
     return EXIT_OK if result.ok else EXIT_STOPPED
 
 

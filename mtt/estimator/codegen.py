@@ -30,6 +30,7 @@ import sympy
 
 from mtt import __version__
 from mtt.derivation.theta import Theta
+from mtt.estimator import advice
 from mtt.language.diagnostics import ModelError, Source, error
 from mtt.resources import resource_dir
 
@@ -278,6 +279,7 @@ def _context(theta: Theta) -> dict:
         example_option = example_k0
     return {
         "version": __version__,
+        "command_line_advice": advice.COMMAND_LINE,
         "model": theta.model,
         "description": theta.description,
         "source": theta.source_name,
