@@ -17,7 +17,8 @@ DC_DRIVE = str(ROOT / "models" / "dc_drive.bg")
 ABSORBER = [str(ROOT / "models" / "absorber.bg"), "--keep", "tau,l"]
 PAPER = ["--beta", "0.1", "--S0", "1e-4"]
 ABSORBER_DATA = [*ABSORBER, "--t-end", "4", "--noise-uniform", "0.02", *PAPER]
-RUN_KEYS = ["global_k", "global_cost", "ok", "stopped_at", "informed_until", "warnings"]
+RUN_KEYS = ["global_k", "global_cost", "ok", "stopped_at", "informed_until", "k_se", "ci", "k_ls",
+            "warnings"]  # fmt: skip
 
 
 def mtt(capsys, *args: str) -> tuple[int, str, str]:
@@ -85,6 +86,11 @@ def test_dc_drive_fig2_numbers(capsys):
         assert abs(run["k"] - 10.0) < 0.1 and run["minima"] == [run["k"]]
         assert run["global_k"] == pytest.approx(run["k"], rel=1e-9) and run["ok"]
         assert abs(run["global_cost"]) < 1e-12 and run["stopped_at"] is None
+        # exact data: the record's least-squares minimum is the true k, the estimate is held
+        # off it by the prior S0 (by -2.5e-4 from k0 = 0), and the standard error is tiny
+        assert abs(run["k_ls"] - 10.0) < 1e-5 and 0 < run["k_se"] < 1e-6
+        assert run["ci"] == pytest.approx([run["k"] - 1.96 * run["k_se"],
+                                           run["k"] + 1.96 * run["k_se"]])  # fmt: skip
 
 
 def test_absorber_figs6_and_8_numbers(capsys):
@@ -131,7 +137,8 @@ def test_simulated_data_round_trip_through_csv(tmp_path, capsys):
     assert status == 0 and out == f"wrote {data}: {note} (seed 0)\n"
     t, u, y = np.loadtxt(data, delimiter=",", skiprows=1).T
     assert t.size == 1001 and t[-1] == 10.0 and np.all(u == 1.0)
-    measured = estimates(capsys, DC_DRIVE, "--data", str(data), "--k0", "5")
+    # a simulated step is held (zoh); read back, the file is measured data (linear by default)
+    measured = estimates(capsys, DC_DRIVE, "--data", str(data), "--k0", "5", "--hold", "zoh")
     simulated = estimates(capsys, DC_DRIVE, "--noise-uniform", "0.01", "--k0", "5")
     assert measured["runs"] == simulated["runs"]
     status, out, _ = mtt(capsys, "simulate", DC_DRIVE, "--t-end", "1", "--dt", "0.5")
@@ -233,7 +240,12 @@ def test_a_local_minimum_that_is_not_the_global_one_is_a_warning(capsys):
     )
     assert err.rstrip().endswith("the global minimum is at k = 0.724187")
     status, out, _ = mtt(capsys, "estimate", *ABSORBER_DATA, "--k0", "0")
-    assert "0.724187 (not the estimate)" in out.splitlines()[-1]
+    lines = out.splitlines()
+    assert "0.724187 (not the estimate)" in lines[-4]
+    # the least-squares standard error describes the global minimum's basin, not this one
+    assert lines[-1] == "  k0 = 0, C(s) = (1 + s)^4: none (not at the global minimum)"
+    assert runs[0]["k_se"] is None and runs[0]["ci"] is None
+    assert runs[1]["ci"][0] < 0.72 < runs[1]["ci"][1] and runs[1]["k_se"] < 0.01
 
 
 def test_a_settled_record_leaves_the_estimate_where_the_data_put_it(capsys):

@@ -32,6 +32,7 @@ from mtt.cli.experiment import (
     signal_label,
     warn,
 )
+from mtt.cli.fitting import uncertainty_lines
 from mtt.estimator import codegen
 
 
@@ -40,6 +41,16 @@ class Run:
     k0: float | np.ndarray  # several unknowns: in the module's UNKNOWNS order
     filter: str  # C(s) as the user wrote it (or the default)
     result: object  # the generated module's Estimate
+    k_se: float | np.ndarray | None = None  # see `_least_squares`
+    k_ls: float | np.ndarray | None = None  # the record's least-squares minimum (no prior)
+
+    @property
+    def ci(self):
+        """The approximate 95 % interval about the final estimate (None without k_se)."""
+        if self.k_se is None:
+            return None
+        k, half = np.atleast_1d(self.result.k), 1.96 * np.atleast_1d(self.k_se)
+        return np.stack([k - half, k + half], 1)
 
 
 def _filters(module: ModuleType, args) -> list[tuple[str, object]]:
@@ -88,7 +99,7 @@ def run_all(module: ModuleType, data: Data, args) -> list[Run]:
                     progress=lambda now, start=start: bar.update(start + now - data.t[0] - bar.n),
                 )  # fmt: skip
                 bar.update(start + span - bar.n)
-                runs.append(Run(k0, label, result))
+                runs.append(Run(k0, label, result, *_least_squares(module, data, result, args)))
     return runs
 
 
@@ -147,7 +158,7 @@ def cmd_estimate(args) -> int:
     curves = [
         plots.Curve(label, run.result.t, run.result.khat, _minima(module, run.result),
                     None if several else run.result.normalised_cost, run.result.global_k,
-                    _band(module, data, run, args) if args.plot and len(runs) == 1 else None)
+                    _band(module, run) if args.plot and len(runs) == 1 else None)
         for label, run in zip(labels, runs, strict=True)
     ]  # fmt: skip
     title = f"{module.MODEL}: {data.note}"
@@ -188,20 +199,30 @@ def cmd_estimate(args) -> int:
     return EXIT_OK if all(run.result.ok for run in runs) else EXIT_STOPPED
 
 
-def _band(module: ModuleType, data: Data, run: Run, args) -> np.ndarray | None:
-    """Half-width of an approximate 95 % band about k^(t) (drawn for a single run: several
-    would hide one another; one unknown): the standard error of the least-squares fit of
-    the same cost over the record (its sandwich variance, which counts the colour of the
-    equation error), scaled by the information gathered, 1/sqrt(J_2)."""
-    result = run.result
-    if not result.ok or len(module.UNKNOWNS) > 1:
-        return None
+def _least_squares(module: ModuleType, data: Data, result, args) -> tuple:
+    """(k_se, k_ls): the final estimate's standard error (a vector for several unknowns),
+    that of the least-squares fit of the same cost J over the record, with the same filter
+    and forgetting (its sandwich variance, which counts the colour of the equation error),
+    and that fit's minimiser, where the estimate would be without the prior S0. (None, None)
+    when the run stopped, ended at a local minimum that is not the global one (whose basin
+    the fit's figures do not describe), or the data do not determine k."""
+    if not (result.ok and result.at_global):  # stopped, or in another minimum's basin
+        return None, None
     final = module.fit(data.t, data.u, data.y, method="ls", C=result.filter, beta=args.beta,
                        hold=hold_of(args), offset=False, initial_state=False)  # fmt: skip
-    if not np.isfinite(final.k_se):
+    if not (final.ok and np.all(np.isfinite(final.k_se))):
+        return None, None
+    return final.k_se, final.k
+
+
+def _band(module: ModuleType, run: Run) -> np.ndarray | None:
+    """Half-width of an approximate 95 % band about k^(t) (drawn for a single run: several
+    would hide one another; one unknown): the final standard error scaled by the
+    information gathered, 1/sqrt(J_2)."""
+    if run.k_se is None or len(module.UNKNOWNS) > 1:
         return None
-    J2 = result.J[0]
-    return 1.96 * final.k_se * np.sqrt(J2[-1] / J2)
+    J2 = run.result.J[0]
+    return 1.96 * run.k_se * np.sqrt(J2[-1] / J2)
 
 
 def _notes(module: ModuleType, run: Run) -> list[tuple[str, str]]:
@@ -231,6 +252,7 @@ def _record(module: ModuleType, runs: list[Run]) -> dict:
     """The --json record (its shape is a public contract): k0, k, minima and global_k are
     numbers for one unknown, lists in the order of `unknowns` for several."""
     plain = unknowns.plain
+    single = len(module.UNKNOWNS) == 1
     return {
         "ok": all(run.result.ok for run in runs),
         "model": module.MODEL,
@@ -247,6 +269,9 @@ def _record(module: ModuleType, runs: list[Run]) -> dict:
                 "ok": run.result.ok,
                 "stopped_at": run.result.stopped_at,
                 "informed_until": run.result.informed_until,
+                "k_se": plain(run.k_se),
+                "ci": plain(None if run.ci is None else (run.ci[0] if single else run.ci)),
+                "k_ls": plain(run.k_ls),
                 "warnings": list(run.result.warnings),
             }
             for run in runs
@@ -289,7 +314,25 @@ def _table(module: ModuleType, data: Data, runs: list[Run]) -> str:
         where += "" if result.ok else f" (at t = {result.t[-1]:g}, where it stopped)"
         ok = "yes" if result.ok else f"no: stopped at t = {result.stopped_at:.6g}"
         globals_.append((start, run.filter, where, cost, ok))
-    return "\n".join([f"{module.MODEL}: {data.note}", *_rows(estimates), "", *_rows(globals_)])
+    errors = [f"standard errors at {end} (of least squares on the same cost over the record):"]
+    for run in runs:
+        start = f"  {_start(module, run)}, C(s) = {run.filter}"
+        if run.k_se is None:
+            why = ("stopped" if not run.result.ok else "not at the global minimum"
+                   if not run.result.at_global else "not determined")  # fmt: skip
+            errors.append(f"{start}: none ({why})")
+            continue
+        errors += [f"{start}:", *uncertainty_lines(module, run.result.k, run.k_se, run.ci, "    ")]
+        held = np.asarray(run.result.k) - np.asarray(run.k_ls)  # a number for one unknown
+        if np.any(np.abs(held) > np.asarray(run.k_se)):
+            errors.append(
+                f"    the prior S0 holds it {unknowns.text(module, held, '+.3g')} from the "
+                f"record's least-squares minimum, {unknowns.named(module, run.k_ls)}, more "
+                "than a standard error: lower S0 (--S0-relative) or use a longer record"
+            )
+    return "\n".join(
+        [f"{module.MODEL}: {data.note}", *_rows(estimates), "", *_rows(globals_), "", *errors]
+    )
 
 
 def _write_trajectories(path: str, module: ModuleType, runs: list[Run]) -> None:

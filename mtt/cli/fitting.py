@@ -120,6 +120,21 @@ def _estimates(module, result) -> str:
     )
 
 
+def uncertainty_lines(module, k, k_se, ci, indent: str = "  ") -> list[str]:
+    """A line per unknown: its estimate, standard error and 95 % interval."""
+    return [
+        f"{indent}{name} = {value:.6g} \u00b1 {se:.3g} (standard error; 95 % interval "
+        f"{low:.6g} to {high:.6g})"
+        for name, value, se, (low, high) in zip(
+            module.UNKNOWNS,
+            np.atleast_1d(k),
+            np.atleast_1d(k_se),
+            np.reshape(ci, (-1, 2)),
+            strict=True,
+        )  # fmt: skip
+    ]
+
+
 def _text(module, records, result) -> str:
     sources = "; ".join(data.note for data in records)
     lines = [f"{module.MODEL}: {sources}"]
@@ -128,18 +143,7 @@ def _text(module, records, result) -> str:
         return "\n".join(lines)
     method = "refined instrumental variables" if result.method == "iv" else "least squares"
     steps = f", {result.iterations} iterations" if result.method == "iv" else ""
-    intervals = np.reshape(result.ci, (-1, 2))
-    lines += [
-        f"  {name} = {value:.6g} \u00b1 {se:.3g} (standard error; 95 % interval "
-        f"{low:.6g} to {high:.6g})"
-        for name, value, se, (low, high) in zip(
-            module.UNKNOWNS,
-            np.atleast_1d(result.k),
-            np.atleast_1d(result.k_se),
-            intervals,
-            strict=True,
-        )  # fmt: skip
-    ]
+    lines += uncertainty_lines(module, result.k, result.k_se, result.ci)
     if len(module.UNKNOWNS) == 1:
         minima = ", ".join(f"{value:.6g}" for value in result.minima)
     else:
