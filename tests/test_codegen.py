@@ -363,3 +363,47 @@ def test_model_unknown_and_parameter_names_of_the_modules_own_names_work(tmp_pat
         [sys.executable, "-c", program], cwd=tmp_path, capture_output=True, text=True, check=True
     )
     assert done.stdout.split() == ["2", "1", "1", "n", "('m',)", "0.1"]
+
+
+RLC = """# a series RLC circuit
+model {model}
+param r = 2
+param t = 1
+unknown {unknown} = 0.1
+Se:v -> 1:loop
+1:loop -> R:r
+1:loop -> I:t
+1:loop -> C:{capacitance}
+1:loop -> Df:i
+"""
+
+
+@pytest.mark.parametrize(
+    "model, unknown, capacitance, options, kind, place",
+    [
+        ("numpy", "c", "c", [], "reserved_name", (2, 7)),  # the model's name
+        ("mymod", "c", "c", ["--keep", "t"], "reserved_name", (4, 7)),  # the kept parameter
+        ("mymod", "lambda", "lambda", [], "bad_name", (5, 9)),  # a keyword as the unknown
+        ("mymod", "c", "cap(r + c - c)", [], "no_dependence", (5, 9)),  # c cancels out
+    ],
+)
+def test_the_generated_codes_names_are_refused_where_the_model_names_them(
+    tmp_path, capsys, model, unknown, capacitance, options, kind, place
+):
+    from mtt.cli.main import main
+
+    path = tmp_path / f"{model}.bg"
+    path.write_text(RLC.format(model=model, unknown=unknown, capacitance=capacitance))
+    assert main(["compile", str(path), "-o", str(tmp_path / "out.py"), *options, "--json"]) == 2
+    out, err = capsys.readouterr()
+    (found,) = json.loads(out)["errors"]
+    assert (found["kind"], found["line"], found["column"], found["file"]) == (
+        kind,
+        *place,
+        str(path),
+    )
+    line = RLC.format(model=model, unknown=unknown, capacitance=capacitance).splitlines()[
+        place[0] - 1
+    ]
+    assert f"{path}:{place[0]}:{place[1]}: error[{kind}]" in err and f" | {line}\n" in err
+    assert not (tmp_path / "out.py").exists()

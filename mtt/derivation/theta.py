@@ -12,11 +12,12 @@ estimator needs to know of the system.
 from __future__ import annotations
 
 from collections.abc import Mapping
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import sympy
 
 from mtt.derivation.transfer import TransferFunction
+from mtt.language.diagnostics import Position, Source
 
 Monomial = tuple[int, ...]  # exponents, one per unknown, in the order of `unknowns`
 
@@ -43,6 +44,11 @@ class Theta:
     matrix: sympy.Matrix  # (n + 1 + m + 1) x len(monomials): rows a0..an, -b0..-bm
     input_description: str | None = None  # the source's description in the model, if any
     output_description: str | None = None  # the detector's
+    # where the model text names things, for messages about them (the generated code's
+    # names): the model file, its name's place, and each parameter's declaration
+    source: Source | None = field(default=None, repr=False, compare=False)
+    name_position: Position | None = field(default=None, repr=False, compare=False)
+    declared: Mapping[str, Position] = field(default_factory=dict, repr=False, compare=False)
 
     @property
     def unknown(self) -> str | None:
@@ -147,4 +153,7 @@ def theta_matrix(tf: TransferFunction) -> Theta:
         matrix=matrix,
         input_description=graph.component(graph.input).description,
         output_description=graph.component(graph.output).description,
+        source=graph.source,
+        name_position=graph.name_position,
+        declared={name: parameter.position for name, parameter in graph.parameters.items()},
     )

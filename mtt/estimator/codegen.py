@@ -50,8 +50,11 @@ SPECIAL_MODULES = frozenset({"sitecustomize", "usercustomize"})
 _PLAIN = re.compile(r"[\w .*/+\-()]+")
 
 
-def _fail(theta: Theta, kind: str, message: str) -> ModelError:
-    return ModelError(Source(theta.source_name, ""), [error(kind, message)])
+def _fail(theta: Theta, kind: str, message: str, name: str | None = None) -> ModelError:
+    """An error at the declaration of the parameter `name`, or at the model's name ("" for
+    it), or at no place (None: Theta itself)."""
+    place = None if name is None else theta.declared.get(name) if name else theta.name_position
+    return ModelError(theta.source or Source(theta.source_name, ""), [error(kind, message, place)])
 
 
 def _shadows(name: str) -> bool:
@@ -72,20 +75,28 @@ def _shadows(name: str) -> bool:
 def _check(theta: Theta) -> None:
     """Reject what the generated module could not carry safely or use meaningfully."""
     if not (isinstance(theta.model, str) and _is_name(theta.model, dotted=False)):
-        raise _fail(theta, "bad_name", f"the model name {theta.model!r} is not a Python identifier")
+        raise _fail(
+            theta, "bad_name", f"the model name {theta.model!r} is not a Python identifier", ""
+        )
     if _shadows(theta.model):
         raise _fail(
             theta,
             "reserved_name",
             f"the model name {theta.model!r} is the name of a Python module: the estimator "
             f"module {theta.model}.py would shadow it wherever it is imported; rename the model",
+            "",
         )
-    for name in theta.unknowns:
-        if not _is_name(name):
-            raise _fail(theta, "bad_name", f"the unknown {name!r} is not a parameter name")
+    for role, names in (("unknown", theta.unknowns), ("parameter", theta.symbols)):
+        for name in names:
+            if not _is_name(name):
+                raise _fail(
+                    theta,
+                    "bad_name",
+                    f"the {role} {name!r} is (or has a part that is) a Python keyword, which "
+                    "the estimator module cannot name; rename it in the model",
+                    name,
+                )
     for name in theta.symbols:
-        if not _is_name(name):
-            raise _fail(theta, "bad_name", f"the parameter {name!r} is not a parameter name")
         if name in RESERVED:
             raise _fail(
                 theta,
@@ -93,21 +104,22 @@ def _check(theta: Theta) -> None:
                 f"the parameter {name!r} cannot be kept symbolic: the estimator's functions "
                 "take an argument of that name; substitute its value (drop it from --keep) "
                 "or rename it in the model",
+                name,
             )
-    if theta.N < 1:
-        raise _fail(
-            theta,
-            "no_dependence",
-            f"the transfer function does not depend on {', '.join(theta.unknowns)}: there is "
-            "nothing to identify",
-        )
     idle = [name for name, degree in theta.degrees.items() if degree == 0]
     if idle:
+        nothing = theta.N < 1
         raise _fail(
             theta,
             "no_dependence",
-            f"the transfer function does not depend on {idle[0]}: it cannot be identified; "
-            "make it a known parameter (or choose the unknowns with --unknown)",
+            f"the transfer function does not depend on {', '.join(idle)}: "
+            + (
+                "there is nothing to identify"
+                if nothing
+                else "it cannot be identified; make it "
+                "a known parameter (or choose the unknowns with --unknown)"
+            ),
+            idle[0],
         )
 
 
@@ -171,6 +183,7 @@ def _in_range(theta: Theta, value: sympy.Expr, name: str | None = None) -> sympy
             f"{what}, about {_magnitude(value)}, is beyond the floating-point "
             "range (about 1e-308 to 1e308) that the estimator computes in; give the parameters "
             "values in units nearer 1",
+            name,
         )
     return value
 

@@ -20,7 +20,14 @@ from typing import TYPE_CHECKING
 
 from mtt.language.checks import FileCheck
 from mtt.language.components import LIBRARY, PortRule, Role
-from mtt.language.diagnostics import Diagnostic, ModelError, Severity, Source, error
+from mtt.language.diagnostics import (
+    Diagnostic,
+    ModelError,
+    Position,
+    Severity,
+    Source,
+    error,
+)
 from mtt.language.elements import Component, Parameter
 from mtt.language.expressions import Expression
 from mtt.language.flatten import Assembly, Bond, assemble
@@ -77,6 +84,7 @@ class BondGraph:
     subsystems: tuple[Subsystem, ...] = ()  # depth first, in file order
     port_bonds: MappingProxyType = field(default_factory=lambda: MappingProxyType({}))
     # each SS port -> the bond it joined
+    name_position: Position | None = None  # the model's name in its `model` statement
 
     def component(self, name: str) -> Component:
         return self.named[name]
@@ -272,6 +280,7 @@ def build(parsed: ParsedModel, selection: Selection | None = None) -> BondGraph:
         source=parsed.source,
         name=parsed.header.name,
         description=parsed.header.description,
+        name_position=parsed.header.position,
         named=MappingProxyType(dict(assembly.components)),
         bonds=tuple(sorted(assembly.bonds, key=lambda b: b.number)),
         parameters=MappingProxyType(assembly.parameters),
