@@ -283,6 +283,7 @@ def test_read_csv(dc_drive, tmp_path):
         "t,u,y\n0,1,1e400\n": r"bad.csv:2: column 'y': 1e400 is out of range",
         "t,u\n0,1\n": r"bad.csv:1: no column 'y' \(the header names t, u\)",
         "": "the file is empty",
+        "t,u,y\n0,\u0663,2\n": r"bad.csv:2: column 'u' holds '\u0663', not a number",  # ASCII only
     }
     bad = tmp_path / "bad.csv"
     for text, message in cases.items():
@@ -292,6 +293,32 @@ def test_read_csv(dc_drive, tmp_path):
     bad.write_bytes(b"t,u,y\n0,\xff,1\n")
     with pytest.raises(ValueError, match=r"bad.csv: not UTF-8 text"):
         dc_drive.read_csv(bad)
+
+
+@pytest.mark.parametrize(
+    "text",
+    [
+        "t,u,y\n0,1,2\n1,3,4\n",
+        "t,u,y\r\n0,1,2\r\n1,3,4\r\n",
+        "\ufeff y, x ,u,t\n 2 ,9, +1.,0\n\n4E+3,9,.5,1e-2\n\n",
+        '"t",u,y\n"0",1,2\n',  # quoted: the checked reader's
+        "\nt,u,y\n0,1,2\n",  # a blank line first: the checked reader's
+    ],
+)
+def test_read_csv_fast_and_checked_readers_agree(dc_drive, tmp_path, text):
+    """Plain files go through numpy's parser, anything else through the checked reader:
+    the same values to the bit either way."""
+    path = tmp_path / "data.csv"
+    path.write_bytes(text.encode())
+    checked = dc_drive._read_csv_checked(path, ("t", "u", "y"))
+    for got, expected in zip(dc_drive.read_csv(path), checked, strict=True):
+        np.testing.assert_array_equal(got, expected)
+    rng = np.random.default_rng(5)
+    values = rng.standard_normal((500, 3)) * 10.0 ** rng.integers(-300, 300, (500, 3))
+    path.write_text("t,u,y\n" + "".join(f"{a!r},{b!r},{c!r}\n" for a, b, c in values.tolist()))
+    assert dc_drive._read_plain_csv(path, ("t", "u", "y")) is not None
+    for got, column in zip(dc_drive.read_csv(path), values.T, strict=True):
+        np.testing.assert_array_equal(got, column)
 
 
 def test_the_module_command_line_fits_several_files(dc_drive, tmp_path, capsys):

@@ -51,6 +51,12 @@ def test_ten_thousand_minus_signs_are_a_line_too_long():
     assert "longer than" in only(problem)[3] and took < HANG
 
 
+def test_numbers_are_written_in_ascii_digits():
+    # Python's int() reads other scripts' digits ('\u0663' is 3): the grammar does not
+    problem, _ = failure(model("\u0663 * c"))
+    assert only(problem)[:3] == ("syntax", 4, 12)
+
+
 def test_deep_nesting_is_a_located_limit_not_a_recursion_error():
     # 5000 minus signs fit on a line: lark reads them, the tree is built without recursion
     problem, took = failure(model("-" * 5000 + "c"))

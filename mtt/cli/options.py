@@ -21,7 +21,7 @@ if TYPE_CHECKING:
 # argparse takes an argument that starts with "-" for an option unless it looks like a
 # negative number, which to Python 3.11's argparse -1e-3, -inf and -1:0 do not (`--k0 -inf`
 # said "expected one argument"). No option of mtt starts with a digit, ".", inf or nan.
-NEGATIVE_NUMBER = re.compile(r"-(?:\.?\d|inf|nan)", re.IGNORECASE)
+NEGATIVE_NUMBER = re.compile(r"-(?:\.?[0-9]|inf|nan)", re.IGNORECASE)
 
 
 class Parser(argparse.ArgumentParser):
