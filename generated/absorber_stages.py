@@ -815,20 +815,53 @@ def _interval_maps(A, B, steps, beta: float, hold: str, forms: np.ndarray, span=
     return Phi, Gamma, 0.5 * (W + np.swapaxes(W, -1, -2))
 
 
+_BLOCK_MAPS: dict = {}  # see _block_maps
+
+
+def _block_maps(Phi: np.ndarray, Gamma: np.ndarray | None, length: int):
+    """Phi^L, and the map of a block's L inputs to its end state from rest (the stacked
+    (Phi^(L-1-j) Gamma^T)^T; Gamma None: the identity, the map then the same for every
+    recursion of the batch), read-only. Kept, as a stream's chunks, all of one step, need the
+    same ones at every level of `_propagate`."""
+    key = (Phi.tobytes(), Phi.shape, length)
+    key += () if Gamma is None else (Gamma.tobytes(), Gamma.shape)
+    found = _BLOCK_MAPS.get(key)
+    if found is None:
+        size = Phi.shape[-1]
+        powers = np.empty((length + 1, size, size))
+        powers[0] = np.eye(size)
+        for j in range(length):
+            np.matmul(Phi, powers[j], out=powers[j + 1])
+        steps = np.swapaxes(powers[length - 1 :: -1], 1, 2)
+        if Gamma is None:
+            kernel = steps.reshape(-1, size)
+        else:  # one product a batch
+            kernel = np.swapaxes(Gamma[None] @ steps[:, None], 0, 1).reshape(len(Gamma), -1, size)
+        # contiguous, as a product with a strided kernel is summed in another order
+        found = (powers[length:], np.ascontiguousarray(kernel))
+        for array in found:
+            array.flags.writeable = False
+        if len(_BLOCK_MAPS) >= 64:  # irregular chunk sizes or many models: forget the oldest
+            del _BLOCK_MAPS[next(iter(_BLOCK_MAPS))]
+        _BLOCK_MAPS[key] = found
+    return found
+
+
 def _propagate(Phi, Gamma, ends, z0, index=None, out=None) -> np.ndarray:
     """States of a batch of recursions z_(i+1) = Phi[k] z_i + Gamma[k, b]^T ends[b, i].
 
-    k = index_i (None: 0); Phi (k, s, s), Gamma (k, batch, e, s), ends (batch, n, e), z0
-    (batch, s); the states (batch, n + 1, s), from z_0 = z0, are written into `out` if
-    given. By blocks of L intervals: each block's end state from rest is one convolution
-    (a product with the stacked Phi^j Gamma), the block starts follow one another (the same
-    recursion with the blocks' transition Phi^L, done the same way), then all blocks advance
-    together from their starts, one matrix product per position in a block. (Steps that
-    differ from one interval to the next: from rest, the starts, then again from them.)
-    Python loops run over about 2 L log(n) / log(L) steps, each a small product over all
-    blocks. The arithmetic is the plain recursion's, exact for every step: no transfer
-    function in z, whose coefficients lose all accuracy when the filter's poles crowd near
-    z = 1 at fine sampling.
+    k = index_i (None: 0); Phi (k, s, s), Gamma (k, batch, e, s) or None (the identity: the
+    ends are the increments, e = s), ends (batch, n, e), z0 (batch, s); the states (batch,
+    n + 1, s), from z_0 = z0, are written into `out` if given. By blocks of L intervals:
+    each block's end state from rest is one convolution (a product with the stacked
+    Phi^j Gamma), the block starts follow one another (the same recursion with the blocks'
+    transition Phi^L, done the same way), then all blocks advance together from their
+    starts, one matrix product per position in a block. (Steps that differ from one
+    interval to the next: from rest, the starts, then again from them.) Python loops run
+    over about 2 L log(n) / log(L) steps, each a small product over all blocks. The
+    arithmetic is the plain recursion's, exact for every step: no transfer function in z,
+    whose coefficients lose all accuracy when the filter's poles crowd near z = 1 at fine
+    sampling.
     """
     batch, count = ends.shape[:2]
     size = Phi.shape[-1]
@@ -843,20 +876,20 @@ def _propagate(Phi, Gamma, ends, z0, index=None, out=None) -> np.ndarray:
         O = out[:, :done].reshape(batch, blocks, length, size)
         E = ends[:, :done].reshape(batch, blocks, length, -1)
         if index is None:
-            powers = np.empty((length + 1, size, size))
-            powers[0] = np.eye(size)
-            for j in range(length):
-                np.matmul(Phi[0], powers[j], out=powers[j + 1])
-            # each block's end from rest, sum_j Phi^(L-1-j) Gamma^T e_j: one product a batch
-            kernel = Gamma[0][None] @ np.swapaxes(powers[length - 1 :: -1], 1, 2)[:, None]
+            transition, kernel = _block_maps(Phi[0], None if Gamma is None else Gamma[0], length)
             inputs = np.ascontiguousarray(E).reshape(batch, blocks, -1)
-            last = inputs @ np.swapaxes(kernel, 0, 1).reshape(batch, -1, size)
-            identity = np.broadcast_to(np.eye(size), (1, batch, size, size))
-            starts = _propagate(powers[length:], identity, last, z0)
-            O[:, :, 0] = starts[:, :blocks]
-            for j in range(length - 1):  # then every block from its start, all at once
-                np.matmul(O[:, :, j], transposed[0], out=O[:, :, j + 1])
-                O[:, :, j + 1] += E[:, :, j] @ Gamma[0]
+            starts = _propagate(transition, None, inputs @ kernel, z0)
+            # then every block from its start, all at once, one position after the other,
+            # in arrays by position (contiguous operands make the small products cheap)
+            if Gamma is not None:  # every interval's input term, in one product
+                E = (ends[:, :done] @ Gamma[0]).reshape(batch, blocks, length, size)
+            drive = E.transpose(2, 0, 1, 3).copy()
+            states = np.empty_like(drive)
+            states[0] = starts[:, :blocks]
+            for j in range(length - 1):
+                np.matmul(states[j], transposed[0], out=states[j + 1])
+                states[j + 1] += drive[j]
+            O[...] = states.transpose(1, 2, 0, 3)
         else:
             where = index[:done].reshape(blocks, length)
             O[:, :, 0] = 0.0  # from rest first
@@ -881,8 +914,8 @@ def _propagate(Phi, Gamma, ends, z0, index=None, out=None) -> np.ndarray:
         out[:, done] = starts[:, blocks]
     for i in range(done, count):  # what the blocks leave: step by step
         k = 0 if index is None else index[i]
-        following = out[:, i, None] @ transposed[k] + ends[:, i, None] @ Gamma[k]
-        out[:, i + 1] = following[:, 0]
+        drive = ends[:, i, None] if Gamma is None else ends[:, i, None] @ Gamma[k]
+        out[:, i + 1] = (out[:, i, None] @ transposed[k] + drive)[:, 0]
     return out
 
 
