@@ -346,6 +346,18 @@ def _bounded(name: str, array: np.ndarray) -> None:
         )
 
 
+def _sample(t, u, y, after: float) -> tuple[float, float, float] | None:
+    """One sample given as numbers that `_signals` accepts, as floats, checked without
+    arrays (a Tracker's common case); None for anything else, which `_signals` takes or
+    explains."""
+    if not all(isinstance(value, int | float) for value in (t, u, y)):
+        return None
+    t, u, y = float(t), float(u), float(y)
+    if not (math.isfinite(t) and t > after and abs(u) <= MAX_SIGNAL and abs(y) <= MAX_SIGNAL):
+        return None
+    return t, u, y
+
+
 def _signals(*named: tuple[str, object], minimum: int, after: float = -math.inf) -> list:
     """Sample times (the first) and signals, checked: finite, bounded, same length, t
     increasing.
@@ -992,14 +1004,17 @@ def _columns(P) -> list:
     return [P[..., i] for i in range(P.shape[-1])] if isinstance(P, np.ndarray) else list(P)
 
 
+# repeated synthetic division by (x - k) of a polynomial of each degree: the coefficients it
+# updates in turn (pass low = 0, 1, .. updates a_i += k a_(i+1) for i = degree - 1 down to low)
+_DIVISIONS = [[i for low in range(d) for i in range(d - 1, low - 1, -1)] for d in range(2 * N + 1)]
+
+
 def _taylor(P, k):
     """Taylor coefficients about k of each row of P (ascending powers): row[i] = P^(i)(k)/i!.
     (Arrays: a view of them held by coefficient, see `_Run._piece`.)"""
     a = _columns(P)
-    degree = len(a) - 1
-    for low in range(degree):  # repeated synthetic division by (x - k)
-        for i in range(degree - 1, low - 1, -1):
-            a[i] = a[i] + k * a[i + 1]
+    for i in _DIVISIONS[len(a) - 1]:
+        a[i] = a[i] + k * a[i + 1]
     return np.moveaxis(np.stack(a), 0, -1) if isinstance(P, np.ndarray) else a
 
 
@@ -1011,17 +1026,23 @@ def _value(P, k):
     return value
 
 
-def _slopes(P, k):
-    """J_1 and J_2 of each row at its k, and the size of the terms J_1 sums (its rounding)."""
-    a, distance = _columns(P), abs(k)
-    sizes = [abs(value) for value in a]
+def _slope_terms(a: list) -> list:
+    """What `_slopes` sums for the polynomial a (floats), by power from the highest down to 1:
+    the terms of J_1, of the size of its terms and of J_2, made once for Newton's steps."""
+    return [(p * a[p], p * abs(a[p]), p * (p - 1) * a[p]) for p in range(len(a) - 1, 0, -1)]
+
+
+def _slopes(terms: list, k: float):
+    """J_1 and J_2 at k, and the size of the terms J_1 sums (its rounding), by Horner's rule
+    from `_slope_terms` (J_2 from the powers >= 2)."""
+    distance = abs(k)
     first = second = size = 0.0
-    for p in range(len(a) - 1, 0, -1):
-        first = first * k + p * a[p]
-        size = size * distance + p * sizes[p]
-        if p >= 2:
-            second = second * k + p * (p - 1) * a[p]
-    return first, second, size
+    for d1, s1, d2 in terms[:-1]:
+        first = first * k + d1
+        size = size * distance + s1
+        second = second * k + d2
+    d1, s1, _ = terms[-1]
+    return first * k + d1, second, size * distance + s1
 
 
 def _curvature_floor(A, reach):
@@ -1045,7 +1066,7 @@ def _newton(P: np.ndarray, k, iterations: int = 12) -> tuple[np.ndarray, np.ndar
     minimum), or the step was below sqrt(eps) relative (Newton's error is then about its
     square: below rounding); the step is taken either way. Rows that do not converge are
     left as they are. J_1, the size of its terms and J_2 are `_slopes`' Horner recursions,
-    run as one on the three stacked (the same arithmetic in a third of the numpy calls).
+    run as one on the three stacked.
     """
     k = np.array(np.broadcast_to(k, P.shape[:-1]), dtype=float)
     done = np.zeros(k.shape, dtype=bool)
@@ -1609,7 +1630,7 @@ class _Setup:
         reach = (np.abs(phi_map) * scale[:, None]).reshape(2, order, -1).sum(1)
         floor_map = np.repeat(reach, order, axis=0) / scale[:, None]
         forms = _cost_forms(Theta)
-        return _Setup(Theta, A, B, beta, hold, forms, _memory(c), phi_map, floor_map)
+        return _Setup(Theta, A, B, beta, hold, forms, float(_memory(c)), phi_map, floor_map)
 
     def maps(self, steps: np.ndarray):
         """Phi, Gamma (both filters, as one block-diagonal system) and the cost forms W."""
@@ -1742,7 +1763,7 @@ class _Run:
                 self.cache[key] = tuple(part[0] for part in self.setup.maps(np.array([h])))
             found.append(self.cache[key])
         maps = tuple(np.stack(parts) for parts in zip(*found, strict=True))
-        self.step = (steps[0], found[0], maps, _rounding_scales(found[0][2]).tolist()) \
+        self.step = (float(steps[0]), found[0], maps, _rounding_scales(found[0][2]).tolist()) \
             if len(found) == 1 else None  # fmt: skip
         return maps
 
@@ -1756,15 +1777,14 @@ class _Run:
         if not (SCALAR and self.ok and step and abs(h - step[0]) <= TIME_RESOLUTION * abs(t)):
             return False
         Phi, Gamma, W = step[1]
-        scales = step[3]
+        scales, limit = step[3], setup.limit(step[0])
         order = Phi.shape[-1]
         ends = np.array([[self.y, y], [self.u, u]])
         following = self.z.reshape(2, order) @ Phi.T + (ends[:, None] @ Gamma)[:, 0]
         v = np.concatenate([self.z, ends.ravel()])
         noise = setup.noise(following.reshape(1, -1))
-        limit = setup.limit(step[0])
-        last = self.noise
-        quiet = bool((noise[0] <= limit * noise[1]).all() and (last[0] <= limit * last[1]).all())
+        quiet = all(phi <= limit * floor for part in (noise, self.noise)
+                    for phi, floor in zip(part[0].ravel().tolist(), part[1].ravel().tolist()))  # fmt: skip
         growth = setup.beta * h - self.log_scale  # J = exp(log_scale) P, then decays by e^(-beta h)
         if growth > 700.0:
             return False
@@ -1778,8 +1798,9 @@ class _Run:
         P = [p + factor * value for p, value in zip(self.P.tolist(), q, strict=True)]
         k = self.khat
         if not quiet:  # Newton from k^, accepted as in _follow
+            terms = _slope_terms(P)
             for _ in range(12):
-                first, second, size = _slopes(P, k)
+                first, second, size = _slopes(terms, k)
                 if not second > 0:
                     return False
                 step = -first / second
@@ -1791,10 +1812,10 @@ class _Run:
                 return False
             reach, own = abs(k - self.khat), _taylor(P, k)
             if not (own[2] > 0 and _curvature_floor(own, reach) > 0
-                    and _curvature_floor(self.taylor, reach) > 0):  # fmt: skip
+                    and _curvature_floor(self.taylor.tolist(), reach) > 0):  # fmt: skip
                 return False
             self.informed = t
-        scale = max(abs(value) for value in P)
+        scale = max(map(abs, P))
         P = [value / scale for value in P]
         self.P, self.log_scale = np.array(P), self.log_scale + math.log(scale) - setup.beta * h
         self.z, self.t, self.u, self.y, self.noise = following.ravel(), t, u, y, noise
@@ -3505,8 +3526,10 @@ class Tracker:
     def update(self, t, u, y):
         """Take the next sample(s) (numbers, or equal-length arrays, after the last) and
         return the current estimate k^ (several unknowns: a vector)."""
-        arrays = _signals(("t", t), ("u", u), ("y", y), minimum=1, after=self._run.t)
-        self._run.advance(*arrays)
+        run = self._run
+        sample = _sample(t, u, y, after=run.t)  # one sample as numbers: the common case
+        if sample is None or not run._one(*sample):
+            run.advance(*_signals(("t", t), ("u", u), ("y", y), minimum=1, after=run.t))
         self._global = None
         return self.k
 
