@@ -1068,10 +1068,10 @@ def _newton(P: np.ndarray, k, iterations: int = 12) -> tuple[np.ndarray, np.ndar
     left as they are. J_1, the size of its terms and J_2 are `_slopes`' Horner recursions,
     run as one on the three stacked.
     """
-    k = np.array(np.broadcast_to(k, P.shape[:-1]), dtype=float)
+    k = np.full(P.shape[:-1], k, dtype=float)
     done = np.zeros(k.shape, dtype=bool)
     a = np.moveaxis(P, -1, 0)
-    p = np.arange(a.shape[0]).reshape((-1,) + (1,) * k.ndim)
+    p = np.arange(a.shape[0], dtype=float).reshape((-1,) + (1,) * k.ndim)  # floats: no casts
     terms = np.empty((a.shape[0], 3) + k.shape)  # by power: the terms of J_1, size, J_2
     np.multiply(p, a, out=terms[:, 0])
     np.multiply(p, np.abs(a), out=terms[:, 1])
