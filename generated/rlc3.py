@@ -1333,6 +1333,19 @@ def _floor(A: np.ndarray, reach):
     return _curvature_floor(A, reach) if SCALAR else _curvature_floor_several(A, reach)
 
 
+def _curved(own: np.ndarray, before: np.ndarray, reach) -> np.ndarray:
+    """Whether J's curvature is provably positive within `reach` of each new point and of
+    the point before it: own holds J's expansions about the new points (a row each), before
+    the one about the point before the first. With one unknown both bounds are one call,
+    on an array laid out by coefficient (as _curvature_floor reads it)."""
+    if not SCALAR:
+        back = np.concatenate([before[None], own[:-1]])
+        return (_floor(own, reach) > 0) & (_floor(back, reach) > 0)
+    both = np.empty((own.shape[-1], 2, len(own)))
+    both[:, 0], both[:, 1, 0], both[:, 1, 1:] = own.T, before, own[:-1].T
+    return (_curvature_floor(np.moveaxis(both, 0, -1), reach) > 0).all(0)
+
+
 # The global search: every local minimum of a polynomial in several unknowns within a box ------
 #
 # J is a polynomial on a box. In the box's own coordinates x in [0, 1]^p (k = lo + x (hi -
@@ -1872,16 +1885,19 @@ class _Run:
             q[quiet] = 0.0
         if not quiet.all():
             self.informed = times[1 + np.flatnonzero(~quiet)[-1]]
-        # the discounted sums, all scaled by exp(-top) so that nothing overflows; E is a
-        # view of them held by coefficient, as the polynomial steps read one at all samples
+        # the discounted sums, all scaled by exp(-top) so that nothing overflows
         offset = times[1:] - times[0]
         largest = float(np.abs(q).max())
         top = self.log_scale if largest == 0 else max(self.log_scale, math.log(largest))
         top += setup.beta * offset[-1]
         start = self.P * math.exp(self.log_scale - top)
-        E = np.multiply(q.T, np.exp(setup.beta * offset - top), out=np.empty(q.shape[::-1]))
-        np.cumsum(E, 1, out=E)
-        E = (E + start[:, None]).T
+        weights = np.exp(setup.beta * offset - top)
+        if SCALAR:  # E a view of them held by coefficient: the steps read one at all samples
+            E = np.multiply(q.T, weights, out=np.empty(q.shape[::-1]))
+            np.cumsum(E, 1, out=E)
+            E = (E + start[:, None]).T
+        else:  # by sample: the tensors of the several unknowns' steps are rows
+            E = np.cumsum(q * weights[:, None], 0) + start
         log_scale = top - setup.beta * offset
 
         def partial(l: int, tau: float) -> np.ndarray:
@@ -1927,10 +1943,8 @@ class _Run:
             previous = np.concatenate([np.asarray(k, dtype=float)[None], candidate[:-1]])
             reach = np.abs(candidate - previous)
             own = _expansion(E[i:j], candidate)  # J about each new point
-            both = np.empty((own.shape[-1], 2, len(own)))  # and about the old: by coefficient
-            both[:, 0], both[:, 1, 0], both[:, 1, 1:] = own.T, before, own[:-1].T
-            good = converged & _convex(own)  # a minimum: J_2 > 0 at the new point
-            good &= (_floor(np.moveaxis(both, 0, -1), reach) > 0).all(0)  # and on the way
+            good = converged & _convex(own)  # a minimum: J_2 > 0 there
+            good &= _curved(own, before, reach)  # and on the way from the point before
             run = j - i if good.all() else int(np.argmin(good))
             if run:
                 khat[i : i + run], taylor[i : i + run] = candidate[:run], own[:run]
