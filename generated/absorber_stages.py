@@ -853,8 +853,8 @@ def _block_maps(Phi: np.ndarray, Gamma: np.ndarray | None, length: int):
         found = (powers[length:], np.ascontiguousarray(kernel))
         for array in found:
             array.flags.writeable = False
-        if len(_BLOCK_MAPS) >= 64:  # irregular chunk sizes or many models: forget the oldest
-            del _BLOCK_MAPS[next(iter(_BLOCK_MAPS))]
+        if len(_BLOCK_MAPS) >= 64:  # chunks of many sizes, or many models: start again
+            _BLOCK_MAPS.clear()
         _BLOCK_MAPS[key] = found
     return found
 
@@ -1004,14 +1004,14 @@ def _columns(P) -> list:
     return [P[..., i] for i in range(P.shape[-1])] if isinstance(P, np.ndarray) else list(P)
 
 
-# repeated synthetic division by (x - k) of a polynomial of each degree: the coefficients it
-# updates in turn (pass low = 0, 1, .. updates a_i += k a_(i+1) for i = degree - 1 down to low)
+# repeated synthetic division by (x - k), for each degree d: pass low = 0, 1, .., d - 1 sets
+# a_i += k a_(i+1) for i = d - 1 down to low; listed flat, the i of each step in turn
 _DIVISIONS = [[i for low in range(d) for i in range(d - 1, low - 1, -1)] for d in range(2 * N + 1)]
 
 
 def _taylor(P, k):
     """Taylor coefficients about k of each row of P (ascending powers): row[i] = P^(i)(k)/i!.
-    (Arrays: a view of them held by coefficient, see `_Run._piece`.)"""
+    (Arrays: a view of an array held by coefficient, as `_Run._follow` reads them.)"""
     a = _columns(P)
     for i in _DIVISIONS[len(a) - 1]:
         a[i] = a[i] + k * a[i + 1]
@@ -1851,9 +1851,9 @@ class _Run:
             t, u, y = t[1:], u[1:], y[1:]
         span = 300.0 / self.setup.beta if self.setup.beta > 0 else math.inf
         steps = np.diff(np.concatenate([[self.t], t]))
-        regular = steps.size == 0 or steps.max() - steps.min() <= TIME_RESOLUTION * max(
-            abs(t[0]), abs(t[-1])
-        )  # t increases: its largest magnitude is at an end
+        regular = steps.size == 0 or (  # t increases: its largest magnitude is at an end
+            steps.max() - steps.min() <= TIME_RESOLUTION * max(abs(t[0]), abs(t[-1]))
+        )
         length = BLOCK if regular else 2048  # irregular: a map for each step, in memory
         start = 0
         while start < t.size:  # pieces short enough to weigh without overflow
