@@ -741,7 +741,7 @@ class _Steps:
 
     @staticmethod
     def of(t: np.ndarray) -> "_Steps":
-        steps = np.diff(t)
+        steps = t[1:] - t[:-1]
         resolution = TIME_RESOLUTION * max(abs(t[0]), abs(t[-1]))
         if steps.max() - steps.min() <= resolution:
             return _Steps(np.array([np.add.reduce(steps) / steps.size]), None)  # the mean
@@ -880,7 +880,7 @@ def _propagate(Phi, Gamma, ends, z0, index=None, out=None) -> np.ndarray:
     z0 = np.array(z0, dtype=float)  # a copy: z0 may be a view of out
     out = np.empty((batch, count + 1, size)) if out is None else out
     out[:, 0] = z0
-    transposed = np.swapaxes(Phi, -1, -2)
+    transposed = Phi.swapaxes(-1, -2)
     length = max(4, min(32, round(count ** (1 / 3))))
     blocks = count // length if count > 2 * length else 0
     done = blocks * length
@@ -1011,11 +1011,17 @@ _DIVISIONS = [[i for low in range(d) for i in range(d - 1, low - 1, -1)] for d i
 
 def _taylor(P, k):
     """Taylor coefficients about k of each row of P (ascending powers): row[i] = P^(i)(k)/i!.
-    (Arrays: a view of an array held by coefficient, as `_Run._follow` reads them.)"""
-    a = _columns(P)
+    P: a sequence of floats, one row, or rows (2-D); an array gives a view of an array held
+    by coefficient, as `_Run._follow` reads them."""
+    if not isinstance(P, np.ndarray):
+        a = list(P)
+        for i in _DIVISIONS[len(a) - 1]:
+            a[i] = a[i] + k * a[i + 1]
+        return a
+    a = np.array(P.T)  # a copy, a[i] the i-th coefficient of every row: worked in place
     for i in _DIVISIONS[len(a) - 1]:
-        a[i] = a[i] + k * a[i + 1]
-    return np.moveaxis(np.stack(a), 0, -1) if isinstance(P, np.ndarray) else a
+        a[i] += k * a[i + 1]
+    return a.T
 
 
 def _value(P, k):
@@ -1070,7 +1076,7 @@ def _newton(P: np.ndarray, k, iterations: int = 12) -> tuple[np.ndarray, np.ndar
     """
     k = np.full(P.shape[:-1], k, dtype=float)
     done = np.zeros(k.shape, dtype=bool)
-    a = np.moveaxis(P, -1, 0)
+    a = P.T  # P (rows, coefficients): a[i] the i-th of every row
     p = np.arange(a.shape[0], dtype=float).reshape((-1,) + (1,) * k.ndim)  # floats: no casts
     terms = np.empty((a.shape[0], 3) + k.shape)  # by power: the terms of J_1, size, J_2
     np.multiply(p, a, out=terms[:, 0])
@@ -1343,7 +1349,7 @@ def _curved(own: np.ndarray, before: np.ndarray, reach) -> np.ndarray:
         return (_floor(own, reach) > 0) & (_floor(back, reach) > 0)
     both = np.empty((own.shape[-1], 2, len(own)))
     both[:, 0], both[:, 1, 0], both[:, 1, 1:] = own.T, before, own[:-1].T
-    return (_curvature_floor(np.moveaxis(both, 0, -1), reach) > 0).all(0)
+    return (_curvature_floor(both.transpose(1, 2, 0), reach) > 0).all(0)
 
 
 # The global search: every local minimum of a polynomial in several unknowns within a box ------
@@ -1719,7 +1725,7 @@ def _interval_costs(V: np.ndarray, W: np.ndarray, index) -> np.ndarray:
     """q (intervals, 2N+1): each interval's contribution to J's coefficients, v^T W_p v."""
     count, d = V.shape
     if index is None:
-        products = V @ np.swapaxes(W[0], 0, 1).reshape(d, -1)
+        products = V @ W[0].swapaxes(0, 1).reshape(d, -1)
         q = np.einsum("npd,nd->np", products.reshape(count, -1, d), V)
     else:
         q = np.empty((count, W.shape[1]))
@@ -1850,7 +1856,8 @@ class _Run:
                                np.array([self.log_scale])))  # fmt: skip
             t, u, y = t[1:], u[1:], y[1:]
         span = 300.0 / self.setup.beta if self.setup.beta > 0 else math.inf
-        steps = np.diff(np.concatenate([[self.t], t]))
+        times = np.concatenate([[self.t], t])
+        steps = times[1:] - times[:-1]
         regular = steps.size == 0 or (  # t increases: its largest magnitude is at an end
             steps.max() - steps.min() <= TIME_RESOLUTION * max(abs(t[0]), abs(t[-1]))
         )
