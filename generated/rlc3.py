@@ -1083,15 +1083,17 @@ def _newton(P: np.ndarray, k, iterations: int = 12) -> tuple[np.ndarray, np.ndar
     np.multiply(p, np.abs(a), out=terms[:, 1])
     np.multiply(p * (p - 1), a, out=terms[:, 2])
     at = np.empty((3,) + k.shape)  # where each recursion is evaluated: k, |k|, k
-    slopes = np.empty_like(at)
+    slopes = np.empty_like(at)  # J_1, size, J_2
+    powers = range(len(a) - 1, 0, -1)  # Horner's steps, J_2's from the powers >= 2 only
+    horner = [(slopes[:rows], at[:rows], terms[power, :rows])
+              for power, rows in zip(powers, [3] * (len(a) - 2) + [2], strict=True)]  # fmt: skip
     for _ in range(iterations):
         at[0], at[2] = k, k
         np.abs(k, out=at[1])
-        slopes.fill(0.0)  # J_1, size, J_2 (J_2 from the powers >= 2)
-        for power in range(a.shape[0] - 1, 0, -1):
-            rows = slopes[: 3 if power >= 2 else 2]
-            rows *= at[: len(rows)]
-            rows += terms[power, : len(rows)]
+        slopes.fill(0.0)
+        for value, point, term in horner:
+            value *= point
+            value += term
         first, size, second = slopes
         ok = second > 0
         step = np.where(ok, -first / np.where(ok, second, 1.0), 0.0)
