@@ -77,6 +77,7 @@ def run_all(module: ModuleType, data: Data, args) -> list[Run]:
     starts = [unknowns.point(module, k0, "--k0") for k0 in args.k0]
     span = float(data.t[-1] - data.t[0])
     runs = []
+    fits: dict[bytes, object] = {}  # the least-squares fit per filter: runs from each k0 share it
     with tqdm(
         total=span * len(filters) * len(starts),
         desc="estimating",
@@ -99,7 +100,8 @@ def run_all(module: ModuleType, data: Data, args) -> list[Run]:
                     progress=lambda now, start=start: bar.update(start + now - data.t[0] - bar.n),
                 )  # fmt: skip
                 bar.update(start + span - bar.n)
-                runs.append(Run(k0, label, result, *_least_squares(module, data, result, args)))
+                runs.append(Run(k0, label, result, *_least_squares(module, data, result, args,
+                                                                    fits)))  # fmt: skip
     return runs
 
 
@@ -199,17 +201,22 @@ def cmd_estimate(args) -> int:
     return EXIT_OK if all(run.result.ok for run in runs) else EXIT_STOPPED
 
 
-def _least_squares(module: ModuleType, data: Data, result, args) -> tuple:
+def _least_squares(module: ModuleType, data: Data, result, args, fits: dict) -> tuple:
     """(k_se, k_ls): the final estimate's standard error (a vector for several unknowns),
     that of the least-squares fit of the same cost J over the record, with the same filter
     and forgetting (its sandwich variance, which counts the colour of the equation error),
     and that fit's minimiser, where the estimate would be without the prior S0. (None, None)
     when the run stopped, ended at a local minimum that is not the global one (whose basin
-    the fit's figures do not describe), or the data do not determine k."""
+    the fit's figures do not describe), or the data do not determine k. `fits` keeps the
+    fit of each filter (C="auto" may choose another for another k0)."""
     if not (result.ok and result.at_global):  # stopped, or in another minimum's basin
         return None, None
-    final = module.fit(data.t, data.u, data.y, method="ls", C=result.filter, beta=args.beta,
-                       hold=hold_of(args), offset=False, initial_state=False)  # fmt: skip
+    key = np.asarray(result.filter, dtype=float).tobytes()
+    if key not in fits:
+        fits[key] = module.fit(data.t, data.u, data.y, method="ls", C=result.filter,
+                               beta=args.beta, hold=hold_of(args), offset=False,
+                               initial_state=False)  # fmt: skip
+    final = fits[key]
     if not (final.ok and np.all(np.isfinite(final.k_se))):
         return None, None
     return final.k_se, final.k

@@ -270,17 +270,16 @@ def cmd_ss(args) -> int:
 def _derived(args, text, latex) -> int:
     from mtt.cli import report
     from mtt.derivation.pipeline import NO_UNKNOWN
-    from mtt.derivation.theta import theta_matrix
+    from mtt.derivation.theta import refuse_cancelled, theta_matrix
     from mtt.derivation.transfer import transfer_function
     from mtt.language.components import Role
 
     equations = _equations(args, identify=args.command == "theta")
     theta = theta_matrix(transfer_function(equations))
-    graph = equations.causal.bondgraph
-    if args.command == "theta" and not theta.unknowns:
-        raise ModelError(graph.source, [NO_UNKNOWN])
     if args.command == "theta":
-        _refuse_cancelled(graph, theta)
+        if not theta.unknowns:
+            raise ModelError(equations.causal.bondgraph.source, [NO_UNKNOWN])
+        refuse_cancelled(theta)
     if args.json:
         causal = equations.causal
         storage = [c for c in causal.bondgraph.components if c.type.role is Role.STORAGE]
@@ -288,29 +287,6 @@ def _derived(args, text, latex) -> int:
     else:
         print(latex(theta) if args.latex else text(theta))
     return EXIT_OK
-
-
-def _refuse_cancelled(graph: BondGraph, theta) -> None:
-    """An unknown that reaches the output but cancels out of the transfer function (`R:a(k)`
-    in series with `R:b(-k)`): Theta has no column for it, so nothing could identify it.
-    The structural check cannot see this; the exact transfer function does."""
-    from mtt.language.diagnostics import error
-
-    idle = [name for name, degree in theta.degrees.items() if degree == 0]
-    if idle:
-        raise ModelError(
-            graph.source,
-            [
-                error(
-                    "no_dependence",
-                    f"the unknown {name} cancels out of the exact transfer function from "
-                    f"{theta.input} to {theta.output}, so the data cannot tell its value; make "
-                    "it a known parameter (or choose the unknowns with --unknown)",
-                    graph.parameters[name].position,
-                )
-                for name in idle
-            ],
-        )
 
 
 def cmd_tf(args) -> int:

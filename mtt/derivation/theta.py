@@ -17,7 +17,7 @@ from dataclasses import dataclass, field
 import sympy
 
 from mtt.derivation.transfer import TransferFunction
-from mtt.language.diagnostics import Position, Source
+from mtt.language.diagnostics import ModelError, Position, Source, error
 
 Monomial = tuple[int, ...]  # exponents, one per unknown, in the order of `unknowns`
 
@@ -93,6 +93,27 @@ class Theta:
                 )
                 for monomial in self.monomials
             ]
+        )
+
+
+def refuse_cancelled(theta: Theta) -> None:
+    """`no_dependence` at the declaration of each unknown that occurs in no column of Theta:
+    it reached the output (the structural check passed) but cancels out of the exact
+    transfer function (`R:a(k)` in series with `R:b(-k)`), so nothing could identify it."""
+    idle = [name for name, degree in theta.degrees.items() if degree == 0]
+    if idle:
+        raise ModelError(
+            theta.source or Source(theta.source_name, ""),
+            [
+                error(
+                    "no_dependence",
+                    f"the unknown {name} cancels out of the exact transfer function from "
+                    f"{theta.input} to {theta.output}, so the data cannot tell its value; make "
+                    "it a known parameter (or choose the unknowns with --unknown)",
+                    theta.declared.get(name),
+                )
+                for name in idle
+            ],
         )
 
 

@@ -29,7 +29,7 @@ import jinja2
 import sympy
 
 from mtt import __version__
-from mtt.derivation.theta import Theta
+from mtt.derivation.theta import Theta, refuse_cancelled
 from mtt.estimator import advice
 from mtt.language.diagnostics import ModelError, Source, error
 from mtt.resources import resource_dir
@@ -106,21 +106,7 @@ def _check(theta: Theta) -> None:
                 "or rename it in the model",
                 name,
             )
-    idle = [name for name, degree in theta.degrees.items() if degree == 0]
-    if idle:
-        nothing = theta.N < 1
-        raise _fail(
-            theta,
-            "no_dependence",
-            f"the transfer function does not depend on {', '.join(idle)}: "
-            + (
-                "there is nothing to identify"
-                if nothing
-                else "it cannot be identified; make it "
-                "a known parameter (or choose the unknowns with --unknown)"
-            ),
-            idle[0],
-        )
+    refuse_cancelled(theta)
 
 
 def _is_name(name: str, dotted: bool = True) -> bool:
