@@ -440,7 +440,7 @@ def test_a_simulation_that_overflows_is_an_error_not_nan_in_json(capsys, command
 def test_figure_labels_in_physical_words_and_a_legend_beside_the_curves(monkeypatch, capsys):
     # issue 12 item 6: Fig. 5's axes say what the signals are (the model's words for its
     # source and detector), and Fig. 8's legend is outside the axes, over no curve
-    from mtt.cli import plots
+    from mtt.present import plots
 
     figures = {}
     monkeypatch.setattr(plots, "_save", lambda figure, path, dpi: figures.update({path: figure}))

@@ -8,10 +8,10 @@ from types import MappingProxyType
 import pytest
 import sympy
 
-from mtt.cli.report import derived_json
 from mtt.derivation.parameters import ParameterChoice
 from mtt.derivation.pipeline import theta_for, transfer_for
 from mtt.language.diagnostics import ModelError
+from mtt.present.report import derived_json
 
 ROOT = Path(__file__).resolve().parent.parent
 MODELS = ROOT / "models"

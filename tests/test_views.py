@@ -10,10 +10,11 @@ import pytest
 import sympy
 
 import mtt
-from mtt.cli import bode, draw, views
+from mtt.cli import views
 from mtt.cli.main import main
 from mtt.derivation.causality import assign
 from mtt.derivation.pipeline import load
+from mtt.present import bode, drawing
 
 CONFLICT = "model two\ninput Se:a\nparam r = 1\nSe:a -> 0:n\nSe:b -> 0:n\n0:n -> R:r\n0:n -> De:v\n"
 
@@ -26,7 +27,7 @@ def run(capsys, *argv: str) -> tuple[int, str, str]:
 
 def test_a_bond_runs_between_labels_with_its_barb_at_the_head_and_stroke_where_effort_goes():
     a, b, half = np.array([0.0, 0.0]), np.array([2.0, 0.0]), np.array([0.3, 0.1])
-    picture = draw.bond_picture(7, a, b, half, half, stroke_at_head=False)
+    picture = drawing.bond_picture(7, a, b, half, half, stroke_at_head=False)
     start, end = picture.line
     np.testing.assert_allclose([start, end], [[0.3, 0.0], [1.7, 0.0]])  # at the label boxes
     barb_from, barb_to = picture.barb
@@ -35,17 +36,17 @@ def test_a_bond_runs_between_labels_with_its_barb_at_the_head_and_stroke_where_e
     stroke = np.array(picture.stroke)
     np.testing.assert_allclose(stroke.mean(axis=0), start)  # across the tail's end
     assert stroke[0, 0] == stroke[1, 0]  # perpendicular to the bond
-    assert draw.bond_picture(7, a, b, half, half, stroke_at_head=None).stroke is None
+    assert drawing.bond_picture(7, a, b, half, half, stroke_at_head=None).stroke is None
 
 
 def test_the_layout_is_deterministic_and_keeps_labels_apart():
     graph = load(mtt.example("absorber"))
-    first, second = draw.layout(graph), draw.layout(graph)
+    first, second = drawing.layout(graph), drawing.layout(graph)
     assert all(np.array_equal(first[name], second[name]) for name in first)
     points = np.array(list(first.values()))
     distances = np.linalg.norm(points[:, None] - points[None], axis=-1)
     np.fill_diagonal(distances, np.inf)
-    assert distances.min() > 0.5 * draw.BOND_LENGTH
+    assert distances.min() > 0.5 * drawing.BOND_LENGTH
     extent = np.ptp(points, axis=0)
     assert extent[0] >= extent[1]  # laid out wide
 
@@ -57,13 +58,13 @@ def test_a_large_model_is_laid_out_fast_and_unknotted():
         lines += [f"1:s{i} -> R:r{i}(r)", f"1:s{i} -> 0:n{i}", f"0:n{i} -> C:c{i}(c)"]
         lines.append(f"0:n{i} -> 1:s{i + 1}" if i < stages else f"0:n{i} -> De:out")
     graph = mtt.load("\n".join(lines) + "\n").bondgraph
-    assert graph.graph.number_of_nodes() > draw.KAMADA_KAWAI_NODES
-    position, again = draw.layout(graph), draw.layout(graph)
+    assert graph.graph.number_of_nodes() > drawing.KAMADA_KAWAI_NODES
+    position, again = drawing.layout(graph), drawing.layout(graph)
     assert all(np.array_equal(position[name], again[name]) for name in position)
     points = np.array(list(position.values()))
     distances = np.linalg.norm(points[:, None] - points[None], axis=-1)
     np.fill_diagonal(distances, np.inf)
-    assert distances.min() > 0.3 * draw.BOND_LENGTH
+    assert distances.min() > 0.3 * drawing.BOND_LENGTH
 
 
 def test_mtt_draw_writes_every_label_and_bond_number(tmp_path, capsys):
@@ -170,35 +171,35 @@ def test_mtt_bode_of_a_zero_transfer_function_is_an_error_without_warnings(tmp_p
 
 def test_the_figure_has_a_line_a_barb_and_a_stroke_per_bond():
     graph = load(mtt.example("dc_drive"))
-    (with_strokes,) = draw.figure(graph, assign(graph)).axes
-    (without,) = draw.figure(graph).axes
+    (with_strokes,) = drawing.figure(graph, assign(graph)).axes
+    (without,) = drawing.figure(graph).axes
     assert (len(with_strokes.lines), len(without.lines)) == (3 * 11, 2 * 11)
 
 
 def test_signals_of_modulated_sources_are_drawn_as_dashed_arrows():
     graph = load(mtt.example("absorber"))  # MSf streams read the stage concentrations
-    assert draw.signals(graph) == [
+    assert drawing.signals(graph) == [
         ("liquid1", "x1"), ("liquid2", "x2"), ("product", "x3"),
         ("gas3", "x3"), ("gas2", "x2"), ("off_gas", "x1"),
     ]  # fmt: skip
-    (ax,) = draw.figure(graph).axes
+    (ax,) = drawing.figure(graph).axes
     arrows = [child for child in ax.texts if getattr(child, "arrow_patch", None) is not None]
     assert len(arrows) == 6
 
 
 def test_subsystems_are_boxes_around_their_components_named_as_in_their_file():
     graph = load(mtt.example("absorber_stages"))  # three stages from one stage file
-    position = draw.layout(graph)
+    position = drawing.layout(graph)
     half = {name: np.array([0.2, 0.1]) for name in position}
-    boxes = draw.subsystem_boxes(graph, position, half)
+    boxes = drawing.subsystem_boxes(graph, position, half)
     assert list(boxes) == ["s1", "s2", "s3"]
     for name, (lower, upper) in boxes.items():
         members = [n for n in position if n.startswith(name + ".")]
         assert len(members) == 6  # 0:x, C:h, 1:down, 1:up, MSf:liquid, MSf:gas
         assert all((lower < position[n]).all() and (position[n] < upper).all() for n in members)
-    assert draw._local_label(graph, "s2.x") == "0:x"
-    assert draw._local_label(graph, "feed") == "Sf:feed"
-    svg = draw.render(draw.figure(graph), "svg").decode()
+    assert drawing._local_label(graph, "s2.x") == "0:x"
+    assert drawing._local_label(graph, "feed") == "Sf:feed"
+    svg = drawing.render(drawing.figure(graph), "svg").decode()
     assert ">s1</text>" in svg and ">MSf:liquid</text>" in svg
 
 

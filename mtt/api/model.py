@@ -178,13 +178,13 @@ class Model:
 
     def _repr_svg_(self) -> str:
         """The bond graph, drawn (with causal strokes when causality can be assigned)."""
-        from mtt.cli import draw
+        from mtt.present import drawing
 
         try:
             causal = self.causality.causal
         except MttError:
             causal = None
-        return draw.render(draw.figure(self.bondgraph, causal), "svg").decode("utf-8")
+        return drawing.render(drawing.figure(self.bondgraph, causal), "svg").decode("utf-8")
 
     @cached_property
     def causality(self) -> Causality:

@@ -1,7 +1,7 @@
 """What a model derives, as a Python user holds it: plain sympy and numpy, rich in Jupyter.
 
 Each class wraps one representation of the derivation chain (mtt/derivation) and reads
-the same way as the command line prints it (mtt/cli/report.py): the text and LaTeX
+the same way as the command line prints it (mtt/present/report.py): the text and LaTeX
 forms exist once, there.
 """
 
@@ -16,12 +16,12 @@ from functools import cached_property
 import numpy as np
 import sympy
 
-from mtt.cli import report
 from mtt.derivation import theta as derived
 from mtt.derivation.causality import CausalBondGraph, describe
 from mtt.derivation.equations import Equations
 from mtt.derivation.transfer import LAPLACE
 from mtt.language.diagnostics import MttError
+from mtt.present import report
 
 
 def exact(name: str, value: object) -> sympy.Expr:

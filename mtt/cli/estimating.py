@@ -142,7 +142,7 @@ def _cost_range(runs: list[Run], data: Data, given: list[float] | None) -> tuple
 
 
 def cmd_estimate(args) -> int:
-    from mtt.cli import plots  # matplotlib takes a quarter second to import: only plotting pays
+    from mtt.present import plots  # matplotlib: a quarter second, paid by plotting only
 
     if args.cost_range and not args.cost_range[0] < args.cost_range[1]:
         low, high = args.cost_range

@@ -287,7 +287,7 @@ def cmd_compile(args) -> int:
 
 
 def cmd_simulate(args) -> int:
-    from mtt.cli import plots  # matplotlib takes a quarter second to import: only plotting pays
+    from mtt.present import plots  # matplotlib: a quarter second, paid by plotting only
 
     module = _model(args)
     (data,) = experiment_data(module, args)

@@ -66,7 +66,7 @@ def cmd_fit(args) -> int:
         raise UsageError(_files_named(str(error), records)) from None
     warn("fit", result.warnings)
     if args.plot and result.ok:
-        from mtt.cli import plots  # matplotlib takes a quarter second to import: only plotting pays
+        from mtt.present import plots  # matplotlib: a quarter second, paid by plotting only
 
         shown = [
             plots.Record(data.note, data.t, data.y, fitted)

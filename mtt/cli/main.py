@@ -217,7 +217,7 @@ def _load(args) -> BondGraph:
 
 
 def cmd_show(args) -> int:
-    from mtt.cli import report
+    from mtt.present import report
 
     graph = _load(args)
     if args.json:
@@ -228,9 +228,9 @@ def cmd_show(args) -> int:
 
 
 def cmd_causality(args) -> int:
-    from mtt.cli import report
     from mtt.derivation.causality import assign
     from mtt.derivation.causality import describe as describe_causality
+    from mtt.present import report
 
     causal = assign(_load(args))
     if args.json:
@@ -257,7 +257,7 @@ def _equations(args, identify: bool = False) -> Equations:
 
 
 def cmd_ss(args) -> int:
-    from mtt.cli import report
+    from mtt.present import report
 
     equations = _equations(args)
     if args.json:
@@ -268,11 +268,11 @@ def cmd_ss(args) -> int:
 
 
 def _derived(args, text, latex) -> int:
-    from mtt.cli import report
     from mtt.derivation.pipeline import NO_UNKNOWN
     from mtt.derivation.theta import refuse_cancelled, theta_matrix
     from mtt.derivation.transfer import transfer_function
     from mtt.language.components import Role
+    from mtt.present import report
 
     equations = _equations(args, identify=args.command == "theta")
     theta = theta_matrix(transfer_function(equations))
@@ -290,13 +290,13 @@ def _derived(args, text, latex) -> int:
 
 
 def cmd_tf(args) -> int:
-    from mtt.cli import report
+    from mtt.present import report
 
     return _derived(args, report.tf_text, report.tf_latex)
 
 
 def cmd_theta(args) -> int:
-    from mtt.cli import report
+    from mtt.present import report
 
     return _derived(args, report.theta_text, report.theta_latex)
 

@@ -69,18 +69,18 @@ def _dpi(text: str) -> float:
 
 def _save(figure, path: str, dpi: float) -> None:
     """Write a picture; a path that cannot be written is the user's error, said as such."""
-    from mtt.cli import draw
+    from mtt.present import drawing
 
     try:
-        draw.save(figure, path, dpi)
+        drawing.save(figure, path, dpi)
     except OSError as exc:
         raise MttError(f"{exc.filename or path}: {exc.strerror}", kind="io") from None
 
 
 def cmd_draw(args) -> int:
-    from mtt.cli import draw
     from mtt.derivation.causality import assign
     from mtt.derivation.pipeline import load
+    from mtt.present import drawing
 
     graph = load(args.file, selection_from_args(args))
     causal, problem = None, None
@@ -90,7 +90,7 @@ def cmd_draw(args) -> int:
         problem = exc
         print(exc.render(), file=sys.stderr)
         print(f"mtt draw: warning: drawn without causal strokes ({exc.kind})", file=sys.stderr)
-    _save(draw.figure(graph, causal), args.out, args.dpi)
+    _save(drawing.figure(graph, causal), args.out, args.dpi)
     if args.json:
         _print_json(
             {"ok": True, "file": args.file, "out": args.out, "model": graph.name,
@@ -104,8 +104,8 @@ def cmd_draw(args) -> int:
 
 def cmd_bode(args) -> int:
     from mtt.api.model import Model
-    from mtt.cli import bode
     from mtt.derivation.pipeline import load
+    from mtt.present import bode
 
     choice = choice_from_args(args)
     model = Model(load(args.file, choice.selection), choice)
