@@ -413,10 +413,11 @@ def transfer_function(k, **known: float) -> tuple[np.ndarray, np.ndarray]:
     return (num if num.size else np.zeros(1)), den
 
 
-def _responses(A, B, t: np.ndarray, W: np.ndarray, holds: tuple[str, ...], out=None) -> np.ndarray:
-    """States (len(W), len(t), order) of x' = A x + B w from rest, for each row w of W
-    interpolated per its hold: one propagation for all the signals (written into `out`, a
-    view of that shape, if given)."""
+def _responses(A, B, t: np.ndarray, W: np.ndarray, holds: tuple[str, ...], out=None,
+               start=None) -> np.ndarray:  # fmt: skip
+    """States (len(W), len(t), order) of x' = A x + B w from rest (or from the state
+    `start`), for each row w of W interpolated per its hold: one propagation for all the
+    signals (written into `out`, a view of that shape, if given)."""
     W = np.atleast_2d(W)
     steps = _Steps.of(t) if t.size > 1 else _Steps(np.ones(1), None)
 
@@ -427,7 +428,7 @@ def _responses(A, B, t: np.ndarray, W: np.ndarray, holds: tuple[str, ...], out=N
     if steps.index is None:
         Phi, Gamma = maps(steps.values)
     states = np.empty((W.shape[0], t.size, A.shape[0])) if out is None else out
-    states[:, 0] = 0.0
+    states[:, 0] = 0.0 if start is None else start
     ends = np.stack([W[:, :-1], W[:, 1:]], -1)
     chunk = BLOCK if steps.index is None else 2048
     for lo in range(0, t.size - 1, chunk):
@@ -2794,6 +2795,159 @@ def _ls_influence(Theta, t, u, y, k, c, hold, first, last, w) -> np.ndarray:
     share = 0.5 * (np.r_[h, 0.0] + np.r_[0.0, h])
     G = g[::-1] * share[:, None]  # a column per unknown
     return G.T @ G
+
+
+# The exact sampled-data output: G(s, k) in a well-conditioned realisation, its sensitivities ----
+#
+# At k, theta(k) = Theta K(k) gives A(s, k) and B(s, k); their companion (controllable
+# canonical) realisation, scipy's tf2ss form x' = Ac x + bc u, y = cc x + d u, is smooth in k
+# and its derivatives are read off Theta (dAc/dk, dcc/dk from dtheta/dk). The arithmetic is
+# done in other coordinates, z = V^-1 x with V = D Q: D balances Ac (scipy's
+# matrix_balance), Q brings it to real Schur form (orthogonal; quasi-triangular, with a
+# complex pair as a 2 x 2 block and repeated poles as coupled triangular entries, never the
+# ill-conditioned partial fractions of near-repeated poles). The companion matrix itself is
+# never exponentiated: at fine sampling its exponential's entries cancel to the poles near
+# z = 1, which the Schur form keeps on its diagonal.
+#
+# The output of a record (input u held or linear between samples, both exact) is
+#     y^ = h z_u + d u  +  h Phi(t) z0  +  c     (forced response, initial state, offset)
+# where z0 and the offset c enter linearly: they are fitted by least squares at each k
+# (variable projection). The derivative of y^ with respect to k with z0 and c held is the
+# output of the augmented system  [z; dz/dk]' = [[F, 0], [dF, F]] [z; dz/dk] + [g; 0] u,
+# exact for the hold by the same matrix exponentials (`_responses`).
+
+
+@dataclass(frozen=True)
+class _Realisation:
+    """G(s, k) as z' = F z + g u, y = h z + d u, with V mapping z to tf2ss's coordinates
+    (x = V z); dF, dh, dd: the derivatives with respect to each unknown (first axis)."""
+
+    F: np.ndarray
+    g: np.ndarray
+    h: np.ndarray
+    d: float
+    V: np.ndarray
+    dF: np.ndarray
+    dh: np.ndarray
+    dd: np.ndarray
+
+    @property
+    def order(self) -> int:
+        return self.F.shape[0]
+
+
+def _realise(Theta: np.ndarray, k) -> _Realisation | None:
+    """The realisation of G(s, k) and its sensitivities; None where A(s, k) loses its
+    leading coefficient (a pole at infinity: no realisation of the model's order)."""
+    coefficients = Theta @ _K(k)
+    slopes = _theta_slopes(Theta, k)  # a column per unknown
+    a, da = coefficients[: n + 1], slopes[: n + 1].T
+    b, db = np.zeros(n + 1), np.zeros((slopes.shape[1], n + 1))
+    b[: m + 1], db[:, : m + 1] = -coefficients[n + 1 :], -slopes[n + 1 :].T
+    lead = a[n]
+    if not (lead != 0 and np.isfinite(coefficients).all() and np.isfinite(slopes).all()):
+        return None
+    monic, bm = a / lead, b / lead
+    dmonic = (da - np.outer(da[:, n], monic)) / lead
+    dbm = (db - np.outer(da[:, n], bm)) / lead
+    d, dd = bm[n], dbm[:, n]
+    rest = bm - d * monic  # the strictly proper part's numerator (ascending; rest[n] = 0)
+    drest = dbm - np.outer(dd, monic) - d * dmonic
+    if n == 0:
+        empty = np.zeros((0, 0))
+        return _Realisation(empty, np.zeros(0), np.zeros(0), float(d), empty,
+                            np.zeros((len(dd), 0, 0)), np.zeros((len(dd), 0)), dd)  # fmt: skip
+    Ac = np.eye(n, k=-1)
+    Ac[0] = -monic[n - 1 :: -1]
+    cc = rest[n - 1 :: -1]
+    balanced, (scale, _) = linalg.matrix_balance(Ac, permute=False, separate=True)
+    F, Q = linalg.schur(balanced, output="real")
+    V = scale[:, None] * Q  # x = V z
+    Vinv = Q.T / scale[None, :]
+    dAc = np.zeros((len(dd), n, n))
+    dAc[:, 0] = -dmonic[:, n - 1 :: -1]
+    return _Realisation(F, Vinv[:, 0], cc @ V, float(d), V, Vinv @ dAc @ V,
+                        drest[:, n - 1 :: -1] @ V, dd)  # fmt: skip
+
+
+def _forced(real: _Realisation, t, u, hold: str) -> np.ndarray:
+    """The output from rest at the samples (exact for the hold)."""
+    if real.order == 0:
+        return real.d * u
+    return _responses(real.F, real.g, t, u, (hold,))[0] @ real.h + real.d * u
+
+
+def _free(real: _Realisation, t: np.ndarray, steps: "_Steps") -> np.ndarray:
+    """The free responses h Phi(t_i - t_0) e_j at the samples, a column per state j."""
+    order = real.order
+    Phi = linalg.expm(real.F * steps.values[:, None, None])
+    if steps.index is None:  # h Phi^i: one recursion of the transposed system, from h
+        quiet = np.zeros((1, t.size - 1, order))
+        return _propagate(np.swapaxes(Phi, 1, 2), None, quiet, real.h[None])[0]
+    quiet = np.zeros((order, t.size - 1, 1))
+    Gamma = np.zeros((len(Phi), order, 1, order))
+    states = _propagate(Phi, Gamma, quiet, np.eye(order), steps.index)  # (j, i, state)
+    return np.einsum("jir,r->ij", states, real.h)
+
+
+def _nuisance_matrix(real: _Realisation, t, steps, offset: bool, initial_state: bool):
+    """The columns the offset (ones) and the initial state (the free responses) add to the
+    output, in that order."""
+    columns = [np.ones((t.size, 1))] if offset else []
+    if initial_state and real.order:
+        columns.append(_free(real, t, steps))
+    return np.concatenate(columns, 1) if columns else np.zeros((t.size, 0))
+
+
+def _nuisance_values(nu: np.ndarray, real: _Realisation, offset: bool, initial_state: bool):
+    """(offset, z0) from the fitted nuisance coefficients."""
+    value = float(nu[0]) if offset else 0.0
+    z0 = nu[int(offset) :] if initial_state and real.order else np.zeros(real.order)
+    return value, z0
+
+
+def _sensitivities(real: _Realisation, t, u, hold: str, z0) -> tuple[np.ndarray, np.ndarray]:
+    """The output from the initial state z0 with input u (without offset), and its
+    derivatives with respect to the unknowns with z0 held: (samples,), (samples, unknowns)."""
+    count, order = len(real.dd), real.order
+    if order == 0:
+        return real.d * u, np.outer(u, real.dd)
+    size = order * (1 + count)
+    F = np.zeros((size, size))
+    g = np.zeros(size)
+    g[:order] = real.g
+    for j in range(count + 1):
+        F[j * order : (j + 1) * order, j * order : (j + 1) * order] = real.F
+        if j:
+            F[j * order : (j + 1) * order, :order] = real.dF[j - 1]
+    start = np.zeros(size)
+    start[:order] = z0
+    states = _responses(F, g, t, u, (hold,), start=start)[0]
+    base = states[:, :order]
+    output = base @ real.h + real.d * u
+    blocks = states[:, order:].reshape(t.size, count, order)
+    slopes = np.einsum("ijr,r->ij", blocks, real.h) + base @ real.dh.T + np.outer(u, real.dd)
+    return output, slopes
+
+
+def _with_nuisances(t, u, y, k, *, hold: str, offset: bool, initial_state: bool, known: dict):
+    """(fitted, offset_value, state): the exact output at k for input u with the record's
+    own initial state and output offset fitted to y by least squares (each only if its
+    flag is set), the offset, and the initial state in the coordinates of
+    scipy.signal.tf2ss(*transfer_function(k)) (zeros when not fitted). What validation
+    on a new record compares with its y."""
+    t, u, y = _signals(("t", t), ("u", u), ("y", y), minimum=1)
+    _choice("hold", hold, HOLDS)
+    k = _point("k", k)
+    real = _realise(theta(**known), k)
+    if real is None:
+        raise ValueError(f"A(s, k) loses its leading coefficient at k = {_shown(k)}: no model")
+    forced = _forced(real, t, u, hold)
+    steps = _Steps.of(t) if t.size > 1 else _Steps(np.ones(1), None)
+    Xi = _nuisance_matrix(real, t, steps, bool(offset), bool(initial_state))
+    nu = np.linalg.lstsq(Xi, y - forced, rcond=None)[0] if Xi.shape[1] else np.zeros(0)
+    value, z0 = _nuisance_values(nu, real, bool(offset), bool(initial_state))
+    return forced + Xi @ nu, value, real.V @ z0
 
 
 # The batch fit: whole records, unbiased under output noise, with the uncertainty of k -------------

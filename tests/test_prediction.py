@@ -1,0 +1,111 @@
+"""The exact sampled-data output of the generated modules (templates/algorithm/prediction):
+the realisation, its sensitivities and `_with_nuisances`, against data made by scipy alone
+(tf2ss, cont2discrete, dlsim, expm), never by the module under test."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from scipy import linalg, signal
+
+
+def _step(A, B, h, x, u0, u1, hold):
+    """x(t + h) of x' = A x + B u, u held at u0 or linear from u0 to u1: Van Loan's block
+    exponential, written here from its definition."""
+    order = A.shape[0]
+    F = np.zeros((order + 2, order + 2))
+    F[:order, :order], F[:order, order] = A, B[:, 0]
+    F[order, order + 1] = 1.0  # u(s) = a + b s
+    E = linalg.expm(F * h)
+    slope = 0.0 if hold == "zoh" else (u1 - u0) / h
+    return E[:order, :order] @ x + E[:order, order] * u0 + E[:order, order + 1] * slope
+
+
+def reference(module, t, u, k, x0, hold: str, **known) -> np.ndarray:
+    """The output of scipy's tf2ss(G(s, k)) from x0, step by step."""
+    A, B, C, D = signal.tf2ss(*module.transfer_function(k, **known))
+    x, y = np.array(x0, dtype=float), np.empty(t.size)
+    for i in range(t.size):
+        y[i] = C[0] @ x + D[0, 0] * u[i]
+        if i + 1 < t.size:
+            x = _step(A, B, t[i + 1] - t[i], x, u[i], u[i + 1], hold)
+    return y
+
+
+def _prbs(t, period, seed):
+    rng = np.random.default_rng(seed)
+    count = int(np.floor((t[-1] - t[0]) / period)) + 1
+    return rng.choice([-1.0, 1.0], count)[np.floor((t - t[0]) / period + 1e-9).astype(int)]
+
+
+def test_dlsim_agrees_with_the_reference(dc_drive):
+    """The step-by-step reference is scipy's dlsim for a held input (a check of the check)."""
+    t = 0.01 * np.arange(201)
+    u = _prbs(t, 0.2, 0)
+    x0 = np.array([0.1, -0.2, 0.3, 0.05])
+    system = signal.cont2discrete(signal.tf2ss(*dc_drive.transfer_function(10.0)), 0.01)
+    expected = signal.dlsim(system, u, t, x0=x0)[1][:, 0]
+    assert np.max(np.abs(reference(dc_drive, t, u, 10.0, x0, "zoh") - expected)) < 1e-12
+
+
+@pytest.mark.parametrize("hold", ["zoh", "linear"])
+def test_with_nuisances_recovers_initial_state_and_offset(dc_drive, hold):
+    t = 0.01 * np.arange(301)
+    u = _prbs(t, 0.2, 1) if hold == "zoh" else np.sin(3 * t) + 0.5 * np.cos(7 * t)
+    x0 = np.random.default_rng(2).standard_normal(4)
+    y = reference(dc_drive, t, u, 10.0, x0, hold) + 0.7
+    fitted, offset, state = dc_drive._with_nuisances(
+        t, u, y, 10.0, hold=hold, offset=True, initial_state=True, known={}
+    )
+    assert np.max(np.abs(fitted - y)) < 1e-11
+    assert offset == pytest.approx(0.7, abs=1e-9)
+    np.testing.assert_allclose(state, x0, atol=1e-8)
+
+
+def test_with_nuisances_irregular_sampling_several_unknowns(dc_motor):
+    rng = np.random.default_rng(3)
+    t = np.r_[0.0, np.sort(rng.uniform(0.0, 6.0, 400))]
+    u = _prbs(t, 0.5, 4)
+    k = {"ra": 1.3, "jl": 7.0}
+    x0 = np.array([0.4, -0.9])
+    y = reference(dc_motor, t, u, k, x0, "zoh") - 0.25
+    fitted, offset, state = dc_motor._with_nuisances(
+        t, u, y, k, hold="zoh", offset=True, initial_state=True, known={}
+    )
+    assert np.max(np.abs(fitted - y)) < 1e-11
+    assert offset == pytest.approx(-0.25, abs=1e-9)
+    np.testing.assert_allclose(state, x0, atol=1e-8)
+
+
+def test_with_nuisances_flags(absorber):
+    """Only what the flags allow is fitted: without them the output is `simulate`'s."""
+    t = 0.01 * np.arange(401)
+    u = _prbs(t, 0.5, 5)
+    known = {"tau": 2.0, "l": 0.5}
+    clean = reference(absorber, t, u, 0.72, np.zeros(3), "zoh", **known)
+    bare = absorber._with_nuisances(
+        t, u, clean + 1.0, 0.72, hold="zoh", offset=False, initial_state=False, known=known
+    )
+    assert np.max(np.abs(bare[0] - clean)) < 1e-12
+    assert bare[1] == 0.0 and not bare[2].any()
+    shifted = absorber._with_nuisances(
+        t, u, clean + 1.0, 0.72, hold="zoh", offset=True, initial_state=False, known=known
+    )
+    assert shifted[1] == pytest.approx(1.0, abs=1e-12) and not shifted[2].any()
+
+
+def test_sensitivities_match_finite_differences(dc_motor):
+    """dy/dk from the augmented system against central differences of the exact output."""
+    t = 0.01 * np.arange(1001)
+    u = _prbs(t, 0.3, 6)
+    k = np.array([1.0, 10.0])
+    real = dc_motor._realise(dc_motor.theta(), k)
+    _, slopes = dc_motor._sensitivities(real, t, u, "zoh", np.zeros(real.order))
+    for j in range(2):
+        step = np.zeros(2)
+        step[j] = 1e-3 * k[j]
+        up, down = (dc_motor._realise(dc_motor.theta(), k + s) for s in (step, -step))
+        difference = (dc_motor._forced(up, t, u, "zoh") - dc_motor._forced(down, t, u, "zoh")) / (
+            2 * step[j]
+        )
+        assert np.max(np.abs(difference - slopes[:, j])) < 1e-6 * np.max(np.abs(slopes[:, j]))
