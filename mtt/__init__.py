@@ -10,8 +10,8 @@ scipy) until one of its names is used, so that the `mtt` command starts at once.
 """
 
 from mtt.language.diagnostics import MttError
+from mtt.version import __version__ as __version__
 
-__version__ = "0.1.0"
 __all__ = [
     "Causality",
     "Identifiability",

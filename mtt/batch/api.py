@@ -206,7 +206,7 @@ def _chunks(specs: list | Iterator, size: int | None) -> Iterator[run.Chunk]:
 # the executors ----------------------------------------------------------------------------
 
 
-def runner(executor, jobs: int | None) -> run._Runner:
+def runner(executor, jobs: int | None) -> run.Runner:
     """Where the chunks run: executor (a concurrent.futures Executor or a dask Client), or
     jobs processes (None: one per core; 1: this process)."""
     if executor is not None:
@@ -342,7 +342,7 @@ class Pooled:
     wherever they run). Made, it has read the records once: `errors` (position -> message)
     are those that could not be read or are too short, left out of every later step."""
 
-    def __init__(self, found: Estimator, pool: run._Runner, specs: list, chunk_size, columns,
+    def __init__(self, found: Estimator, pool: run.Runner, specs: list, chunk_size, columns,
                  progress: Progress | None, offset: bool, initial_state: bool):  # fmt: skip
         self.found, self.pool, self.columns, self.progress = found, pool, tuple(columns), progress
         self.source = pool.share(found.source) if isinstance(pool, run.Dask) else found.source

@@ -52,7 +52,7 @@ def default_jobs() -> int:
         return os.cpu_count() or 1
 
 
-class _Runner:
+class Runner:
     """The loop shared by the pools: keep IN_FLIGHT chunks per worker submitted (so that an
     iterator of records is read as it goes), yield results, send dead chunks again."""
 
@@ -113,7 +113,7 @@ class _Runner:
         pass
 
 
-class InProcess(_Runner):
+class InProcess(Runner):
     """Chunks run here, one after another (jobs=1)."""
 
     def hold(self, function, args):
@@ -125,7 +125,7 @@ class InProcess(_Runner):
             yield chunk, function(*args)
 
 
-class Futures(_Runner):
+class Futures(Runner):
     """Chunks on a concurrent.futures executor; a broken process pool is replaced by a
     fresh one of the same size (shut down by this batch at its end)."""
 
@@ -189,7 +189,7 @@ def is_dask_client(executor: object) -> bool:
     )
 
 
-class Dask(_Runner):
+class Dask(Runner):
     """Chunks on a dask.distributed cluster, through a Client. The workers import mtt's
     worker module alone (standard library only; the estimator arrives as source). Dask
     itself runs again the tasks of a worker that died; a chunk it gives up on

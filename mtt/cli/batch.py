@@ -15,41 +15,16 @@ import glob
 import json
 import sys
 
+from mtt.cli.running import EXIT_OK, EXIT_STOPPED, UsageError, say, warn
+
 SHOWN_WARNINGS = 20  # per-record warnings printed on stderr before a count of the rest
 CONNECT_TIMEOUT = 10.0  # seconds to reach a --scheduler
-
-
-def add_options(parser: argparse.ArgumentParser) -> None:
-    """The fit command's options for many records (building the parser imports nothing
-    heavy: the rest of this module imports what it runs when it runs)."""
-    group = parser.add_argument_group(
-        "many records",
-        "--data takes glob patterns ('logs/*.csv'): each record is then fitted on its own "
-        "(files named one by one are combined into one fit); the options below choose",
-    )
-    mode = group.add_mutually_exclusive_group()
-    mode.add_argument(
-        "--per-record", action="store_true", help="fit each --data record on its own (a table)"
-    )
-    mode.add_argument(
-        "--pooled", action="store_true", help="fit all --data records together (moments add)"
-    )
-    where = group.add_mutually_exclusive_group()
-    where.add_argument(
-        "--jobs", type=int, metavar="N", help="worker processes (default 1: this process)"
-    )
-    where.add_argument(
-        "--scheduler",
-        metavar="ADDRESS",
-        help="run on a dask.distributed scheduler (tcp://host:8786; pip install 'mtt[dask]')",
-    )
 
 
 def mode(args) -> str | None:
     """ "each" (per record), "pooled" (pooled by workers), or None (pooled here: fitting.py).
     Expands the patterns of --data in place."""
     from mtt.batch.api import expand
-    from mtt.cli.experiment import UsageError
     from mtt.language.diagnostics import MttError
 
     data = getattr(args, "data", None) or []
@@ -72,15 +47,8 @@ def mode(args) -> str | None:
 
 def cmd_fit_many(args, kind: str) -> int:
     from mtt.batch import api
-    from mtt.cli.experiment import (
-        EXIT_OK,
-        EXIT_STOPPED,
-        UsageError,
-        _columns,
-        checked_module,
-        say,
-    )
-    from mtt.cli.fitting import options
+    from mtt.cli.experiment import checked_module, columns
+    from mtt.cli.fit_options import options
     from mtt.cli.options import choice_from_args
     from mtt.derivation import pipeline
     from mtt.estimator import codegen
@@ -103,7 +71,7 @@ def cmd_fit_many(args, kind: str) -> int:
         with _bar(len(args.data), kind) as bar:
             batch = api.fit_many(
                 found, args.data, executor=client, jobs=None if client else (args.jobs or 1),
-                pooled=kind == "pooled", columns=_columns(args.columns),
+                pooled=kind == "pooled", columns=columns(args.columns),
                 progress=lambda done, total: bar.update(done - bar.n), **options(module, args),
             )  # fmt: skip
     except MttError as error:
@@ -127,8 +95,6 @@ def cmd_fit_many(args, kind: str) -> int:
 
 
 def _client(address: str):
-    from mtt.cli.experiment import UsageError
-
     try:
         from distributed import Client
     except ImportError:
@@ -152,8 +118,6 @@ def _bar(total: int, kind: str):
 
 
 def _warnings(batch) -> None:
-    from mtt.cli.experiment import warn
-
     lines = [
         f"{o.name}: {text}" for o in batch if o.result is not None for text in o.result.warnings
     ]
@@ -169,8 +133,7 @@ def _named(outcome) -> str:
 
 
 def _pooled(module, args, batch, errors: list[str]) -> int:
-    from mtt.cli.experiment import EXIT_OK, EXIT_STOPPED, UsageError, say, warn
-    from mtt.cli.fitting import _text
+    from mtt.present.fits import fit_text
 
     if errors:  # as in this process: a bad record is the error (named, also in --json)
         for error in errors[1:]:
@@ -187,7 +150,7 @@ def _pooled(module, args, batch, errors: list[str]) -> int:
         record["data"] = notes
         say(json.dumps(record))
     else:
-        say(_text(module, [argparse.Namespace(note=note) for note in notes], result))
+        say(fit_text(module, [argparse.Namespace(note=note) for note in notes], result))
     return EXIT_OK if result.ok else EXIT_STOPPED
 
 
@@ -205,7 +168,7 @@ def _cells(module, outcome) -> tuple[str, ...]:
 
 
 def _table(module, args, batch) -> str:
-    from mtt.cli.experiment import _rows
+    from mtt.present import tables
 
     where = (f"on {args.scheduler}" if args.scheduler else
              f"{args.jobs} processes" if (args.jobs or 1) > 1 else "in this process")  # fmt: skip
@@ -218,7 +181,7 @@ def _table(module, args, batch) -> str:
     fitted = len(batch) - len(batch.errors)
     return "\n".join([
         f"{module.MODEL}: {len(batch)} records, one fit each ({method}, {where})",
-        *_rows([header, *(_cells(module, outcome) for outcome in batch)]),
+        *tables.rows([header, *(_cells(module, outcome) for outcome in batch)]),
         f"  {fitted} of {len(batch)} records fitted" + (f"; {len(batch.errors)} failed"
                                                          if batch.errors else ""),
     ])  # fmt: skip
@@ -228,7 +191,7 @@ def _table_csv(module, batch) -> str:
     """One row per record; several unknowns: k, k_se, ci_low and ci_high of each, named."""
     import numpy as np
 
-    from mtt.cli.experiment import _csv_text
+    from mtt.present import tables
 
     names = [""] if len(module.UNKNOWNS) == 1 else [f"_{name}" for name in module.UNKNOWNS]
     estimates = [f"{part}{name}" for name in names for part in ("k", "k_se", "ci_low", "ci_high")]
@@ -244,4 +207,4 @@ def _table_csv(module, batch) -> str:
                        result.fit_percent, result.residual_rms, result.iterations)  # fmt: skip
         warnings = " | ".join(outcome.result.warnings) if outcome.result is not None else ""
         rows.append((outcome.name, *numbers, warnings, outcome.error or ""))
-    return _csv_text(header, rows)
+    return tables.csv_text(header, rows)

@@ -11,46 +11,17 @@ from __future__ import annotations
 
 import json
 import sys
-from dataclasses import dataclass
 from types import ModuleType
 
 import numpy as np
 from tqdm import tqdm
 
 from mtt.cli import unknowns
-from mtt.cli.experiment import (
-    EXIT_OK,
-    EXIT_STOPPED,
-    Data,
-    UsageError,
-    _csv_text,
-    _model,
-    _rows,
-    experiment_data,
-    hold_of,
-    say,
-    signal_label,
-    warn,
-)
-from mtt.cli.fitting import uncertainty_lines
+from mtt.cli.experiment import Data, experiment_data, hold_of, module_for, signal_label
+from mtt.cli.running import EXIT_OK, EXIT_STOPPED, UsageError, say, warn
 from mtt.estimator import codegen
-
-
-@dataclass(frozen=True)
-class Run:
-    k0: float | np.ndarray  # several unknowns: in the module's UNKNOWNS order
-    filter: str  # C(s) as the user wrote it (or the default)
-    result: object  # the generated module's Estimate
-    k_se: float | np.ndarray | None = None  # see `_least_squares`
-    k_ls: float | np.ndarray | None = None  # the record's least-squares minimum (no prior)
-
-    @property
-    def ci(self):
-        """The approximate 95 % interval about the final estimate (None without k_se)."""
-        if self.k_se is None:
-            return None
-        k, half = np.atleast_1d(self.result.k), 1.96 * np.atleast_1d(self.k_se)
-        return np.stack([k - half, k + half], 1)
+from mtt.present import estimates, values
+from mtt.present.estimates import Run
 
 
 def _filters(module: ModuleType, args) -> list[tuple[str, object]]:
@@ -105,32 +76,6 @@ def run_all(module: ModuleType, data: Data, args) -> list[Run]:
     return runs
 
 
-def _start(module: ModuleType, run: Run) -> str:
-    """`k0 = 5`, or `k0: ra = 0.5, jl = 5` for several unknowns."""
-    if len(module.UNKNOWNS) == 1:
-        return f"k0 = {run.k0:g}"
-    return f"k0: {unknowns.text(module, run.k0)}"
-
-
-def _labels(module: ModuleType, runs: list[Run]) -> list[str]:
-    several_k0 = len({unknowns.text(module, run.k0) for run in runs}) > 1
-    several_filters = len({run.filter for run in runs}) > 1
-    labels = []
-    for run in runs:
-        parts = [_start(module, run)] if several_k0 or not several_filters else []
-        parts += [f"C(s) = {run.filter}"] if several_filters else []
-        labels.append(", ".join(parts))
-    return labels
-
-
-def _minima(module: ModuleType, result) -> np.ndarray:
-    """The local minima of a run's cost at its end (several unknowns: within its bounds;
-    none without them)."""
-    if len(module.UNKNOWNS) > 1 and result.bounds is None:
-        return np.zeros((0, len(module.UNKNOWNS)))
-    return result.minima()
-
-
 def _cost_range(runs: list[Run], data: Data, given: list[float] | None) -> tuple[float, float]:
     if given is not None:
         return given[0], given[1]
@@ -147,7 +92,7 @@ def cmd_estimate(args) -> int:
     if args.cost_range and not args.cost_range[0] < args.cost_range[1]:
         low, high = args.cost_range
         raise UsageError(f"--cost-range needs A < B, not {low:g} {high:g}")
-    module = _model(args)
+    module = module_for(args)
     several = len(module.UNKNOWNS) > 1
     if several and (args.cost_plot or args.cost_range):
         raise UsageError(
@@ -156,9 +101,9 @@ def cmd_estimate(args) -> int:
         )
     (data,) = experiment_data(module, args)
     runs = run_all(module, data, args)
-    labels = _labels(module, runs)
+    labels = estimates.labels(module, runs)
     curves = [
-        plots.Curve(label, run.result.t, run.result.khat, _minima(module, run.result),
+        plots.Curve(label, run.result.t, run.result.khat, estimates.minima(module, run.result),
                     None if several else run.result.normalised_cost, run.result.global_k,
                     _band(module, run) if args.plot and len(runs) == 1 else None)
         for label, run in zip(labels, runs, strict=True)
@@ -187,17 +132,19 @@ def cmd_estimate(args) -> int:
             title=f"{module.MODEL}: normalised cost at t = {data.t[-1]:g}", dpi=args.dpi,
         )  # fmt: skip
     if args.csv:
-        _write_trajectories(args.csv, module, runs)
+        codegen.write_atomic(args.csv, estimates.trajectories_csv(module, runs))
     for run in runs:
-        for kind, text in _notes(module, run):
-            start = f"k0 = {unknowns.text(module, run.k0)}" if several else _start(module, run)
+        for kind, text in estimates.notes(module, run):
+            start = (
+                f"k0 = {values.text(module, run.k0)}" if several else estimates.start_text(module, run)
+            )
             say(f"mtt estimate: {kind}: {start}, C(s) = {run.filter}: {text}", stderr=True)
     for text in dict.fromkeys(text for run in runs for text in run.result.warnings):
         warn("estimate", [text])
     if args.json:
-        say(json.dumps(_record(module, runs)))
+        say(json.dumps(estimates.record(module, runs)))
     else:
-        say(_table(module, data, runs))
+        say(estimates.table(module, data.note, float(data.t[-1]), runs))
     return EXIT_OK if all(run.result.ok for run in runs) else EXIT_STOPPED
 
 
@@ -230,133 +177,3 @@ def _band(module: ModuleType, run: Run) -> np.ndarray | None:
         return None
     J2 = run.result.J[0]
     return 1.96 * run.k_se * np.sqrt(J2[-1] / J2)
-
-
-def _notes(module: ModuleType, run: Run) -> list[tuple[str, str]]:
-    """What a run's table cannot say: it stopped, it is not at the global minimum, or the
-    data stopped informing it."""
-    result = run.result
-    notes = [] if result.ok else [("warning", result.message)]
-    if not result.at_global:
-        best = result.global_k[-1]
-        here, there = unknowns.text(module, result.k, ".6g"), unknowns.text(module, best, ".6g")
-        notes.append((
-            "warning",
-            f"the estimate {unknowns.named(module, result.k)} is a local minimum of J at t = "
-            f"{result.t[-1]:g}, with J({here}) - J({there}) = {-float(result.cost(best)):.3g}: "
-            f"the global minimum is at {unknowns.named(module, best)}",
-        ))  # fmt: skip
-    if result.informed_until is not None:
-        notes.append((
-            "note",
-            f"the data stopped informing the estimate at t = {result.informed_until:.6g}: "
-            "after that they are rounding noise, which leaves it unchanged",
-        ))  # fmt: skip
-    return notes
-
-
-def _record(module: ModuleType, runs: list[Run]) -> dict:
-    """The --json record (its shape is a public contract): k0, k, minima and global_k are
-    numbers for one unknown, lists in the order of `unknowns` for several."""
-    plain = unknowns.plain
-    single = len(module.UNKNOWNS) == 1
-    return {
-        "ok": all(run.result.ok for run in runs),
-        "model": module.MODEL,
-        "unknown": module.UNKNOWN,
-        "unknowns": list(module.UNKNOWNS),
-        "runs": [
-            {
-                "k0": plain(run.k0),
-                "filter": run.filter,
-                "k": plain(run.result.k),
-                "minima": plain(_minima(module, run.result)),
-                "global_k": plain(run.result.global_k[-1]),
-                "global_cost": _global_cost(run.result),
-                "ok": run.result.ok,
-                "stopped_at": run.result.stopped_at,
-                "informed_until": run.result.informed_until,
-                "k_se": plain(run.k_se),
-                "ci": plain(None if run.ci is None else (run.ci[0] if single else run.ci)),
-                "k_ls": plain(run.k_ls),
-                "warnings": list(run.result.warnings),
-            }
-            for run in runs
-        ],
-    }
-
-
-def _global_cost(result) -> float | None:
-    """J(global) - J(estimate); None where J has no global minimiser."""
-    best = result.global_k[-1]
-    return None if np.isnan(best).any() else unknowns.plain(result.cost(best))
-
-
-def _table(module: ModuleType, data: Data, runs: list[Run]) -> str:
-    """The final estimates and local minima, then the global minimum of each run's cost."""
-    end = f"t = {data.t[-1]:g}"
-    several = len(module.UNKNOWNS) > 1
-    final = tuple(f"{name} at {end}" for name in module.UNKNOWNS)
-    estimates = [("k0", "C(s)", *final, "local minima of J")]
-    globals_ = [("k0", "C(s)", f"global minimum of J at {end}", "J(global) - J(estimate)", "ok")]
-    for run in runs:
-        result = run.result
-        minima = _minima(module, result)
-        if several:
-            listed = f"{len(minima)} within the bounds" if result.bounds is not None else "-"
-        else:
-            listed = ", ".join(f"{value:.6g}" for value in minima)
-        stopped = "" if result.ok else " (stopped)"
-        values = [f"{value:.6g}" for value in np.atleast_1d(result.k)]
-        values[-1] += stopped
-        start = unknowns.text(module, run.k0)
-        estimates.append((start, run.filter, *values, listed))
-        best = result.global_k[-1]
-        if several and np.isnan(best).any():
-            where, cost = "none (no bounds)" if result.bounds is None else "none", "-"
-        else:
-            where = unknowns.text(module, best, ".6g")
-            where += "" if result.at_global else " (not the estimate)"
-            cost = f"{float(result.cost(best)):.3g}"
-        where += "" if result.ok else f" (at t = {result.t[-1]:g}, where it stopped)"
-        ok = "yes" if result.ok else f"no: stopped at t = {result.stopped_at:.6g}"
-        globals_.append((start, run.filter, where, cost, ok))
-    errors = [f"standard errors at {end} (of least squares on the same cost over the record):"]
-    for run in runs:
-        start = f"  {_start(module, run)}, C(s) = {run.filter}"
-        if run.k_se is None:
-            why = ("stopped" if not run.result.ok else "not at the global minimum"
-                   if not run.result.at_global else "not determined")  # fmt: skip
-            errors.append(f"{start}: none ({why})")
-            continue
-        errors += [f"{start}:", *uncertainty_lines(module, run.result.k, run.k_se, run.ci, "    ")]
-        held = np.asarray(run.result.k) - np.asarray(run.k_ls)  # a number for one unknown
-        if np.any(np.abs(held) > np.asarray(run.k_se)):
-            errors.append(
-                f"    the prior S0 holds it {unknowns.text(module, held, '+.3g')} from the "
-                f"record's least-squares minimum, {unknowns.named(module, run.k_ls)}, more "
-                "than a standard error: lower S0 (--S0-relative) or use a longer record"
-            )
-    return "\n".join(
-        [f"{module.MODEL}: {data.note}", *_rows(estimates), "", *_rows(globals_), "", *errors]
-    )
-
-
-def _write_trajectories(path: str, module: ModuleType, runs: list[Run]) -> None:
-    """k^(t) of every run, and for one unknown J_2..J_2N."""
-    if len(module.UNKNOWNS) == 1:
-        header = ["run", "k0", "filter", "t", "khat"]
-        header += [f"J{i}" for i in range(2, 2 * module.N + 1)]
-        rows = (
-            [number, run.k0, run.filter, t, khat, *J]
-            for number, run in enumerate(runs, start=1)
-            for t, khat, J in zip(run.result.t, run.result.khat, run.result.J.T, strict=True)
-        )
-    else:
-        header = ["run", "k0", "filter", "t", *(f"khat_{name}" for name in module.UNKNOWNS)]
-        rows = (
-            [number, unknowns.text(module, run.k0), run.filter, t, *khat]
-            for number, run in enumerate(runs, start=1)
-            for t, khat in zip(run.result.t, run.result.khat, strict=True)
-        )
-    codegen.write_atomic(path, _csv_text(header, rows))

@@ -7,13 +7,8 @@ template; what is here is the experiment around it: data, runs, tables and figur
 
 from __future__ import annotations
 
-import argparse
-import csv
-import io
 import json
 import sys
-import warnings
-from collections.abc import Callable
 from dataclasses import dataclass
 from types import ModuleType
 
@@ -22,16 +17,12 @@ import numpy as np
 from mtt.cli import unknowns
 from mtt.cli.experiment_args import DEFAULT_DT, DEFAULT_SEED, DEFAULT_T_END
 from mtt.cli.options import choice_from_args
+from mtt.cli.running import EXIT_OK, UsageError
 from mtt.derivation import pipeline
 from mtt.estimator import codegen
-from mtt.estimator.advice import for_command_line
+from mtt.present import tables, values
 
-EXIT_OK, EXIT_STOPPED, EXIT_USAGE = 0, 1, 2
 MAX_SAMPLES = 10**7
-
-
-class UsageError(Exception):
-    """Options or data that do not make an experiment; the message says why."""
 
 
 # the data ------------------------------------------------------------------------------
@@ -113,16 +104,16 @@ def experiment_data(module: ModuleType, args, several: bool = False) -> list[Dat
                 f"{args.command} takes one --data ({len(args.data)} given); `mtt fit` combines "
                 "several experiments"
             )
-        columns = _columns(args.columns)
+        names = columns(args.columns)
         records = []
         for path in args.data:
-            t, u, y = module.read_csv(path, columns)
+            t, u, y = module.read_csv(path, names)
             late = np.flatnonzero(np.diff(t) <= 0)
             if late.size:  # named here: the module's message cannot name the file
                 i = int(late[0])
                 later, earlier = float(t[i + 1]), float(t[i])
                 raise UsageError(
-                    f"{path}: the times (column {columns[0]!r}) must increase strictly: "
+                    f"{path}: the times (column {names[0]!r}) must increase strictly: "
                     f"{later!r} (data row {i + 2}) follows {earlier!r} (data row {i + 1})"
                 )
             records.append(Data(t, u, y, None, None, f"{t.size} samples from {path}"))
@@ -137,7 +128,7 @@ def experiment_data(module: ModuleType, args, several: bool = False) -> list[Dat
             f"the model gives no value of {', '.join(k)} to simulate with: pass --true {example}"
         )
     clean = module.simulate(t, u, k, hold=hold_of(args))
-    named = unknowns.named(module, k, "g")
+    named = values.named(module, k, "g")
     _finite(clean, t, named)
     seed = DEFAULT_SEED if args.seed is None else args.seed
     note = f"{t.size} samples simulated with {named}, input {source}"
@@ -171,7 +162,7 @@ def _finite(y: np.ndarray, t: np.ndarray, named: str) -> None:
         )
 
 
-def _columns(text: str | None) -> tuple[str, str, str]:
+def columns(text: str | None) -> tuple[str, str, str]:
     """--columns T,U,Y: the names of the time, input and output columns."""
     if text is None:
         return ("t", "u", "y")
@@ -184,15 +175,7 @@ def _columns(text: str | None) -> tuple[str, str, str]:
 # the commands --------------------------------------------------------------------------
 
 
-def _csv_text(header: list[str], rows) -> str:
-    buffer = io.StringIO()
-    writer = csv.writer(buffer, lineterminator="\n")
-    writer.writerow(header)
-    writer.writerows(rows)
-    return buffer.getvalue()
-
-
-def _model(args) -> ModuleType:
+def module_for(args) -> ModuleType:
     return checked_module(codegen.load(pipeline.theta_for(args.file, choice_from_args(args))))
 
 
@@ -203,44 +186,6 @@ def checked_module(module: ModuleType) -> ModuleType:
         name = missing[0]
         raise UsageError(f"the model gives no value for {name}: pass --set {name}=VALUE")
     return module
-
-
-def guarded(action: Callable[[argparse.Namespace], int]) -> Callable[[argparse.Namespace], int]:
-    """Bad options, data and files end with a message and exit status 2, not a traceback
-    (with --json also {"ok": false, "errors": [...]} on stdout). The estimator's warnings
-    are reported by each command from its results; numpy's floating-point warnings, which
-    the estimator's checks turn into messages, are not shown."""
-
-    def run(args) -> int:
-        message = None
-        try:
-            with warnings.catch_warnings(record=True) as caught, np.errstate(all="ignore"):
-                warnings.simplefilter("always")
-                status = action(args)
-            for warning in caught:
-                if not _handled(warning.category):
-                    say(f"mtt {args.command}: warning: {warning.message}", stderr=True)
-            return status
-        except (UsageError, ValueError) as exc:
-            message = str(exc)
-        except BrokenPipeError:  # stdout closed by its reader: main's business, not an error
-            raise
-        except OSError as exc:
-            message = f"{exc.filename}: {exc.strerror}" if exc.filename else str(exc)
-        message = for_command_line(message)
-        print(f"mtt {args.command}: error: {message}", file=sys.stderr)
-        if getattr(args, "json", False):
-            error = {"file": getattr(args, "file", None), "kind": "usage", "line": None,
-                     "column": None, "message": message, "notes": []}  # fmt: skip
-            print(json.dumps({"ok": False, "errors": [error]}))
-        return EXIT_USAGE
-
-    return run
-
-
-def _handled(category: type) -> bool:
-    """Warnings a command reports itself (the estimator's) or that say nothing to a user."""
-    return issubclass(category, RuntimeWarning) or category.__name__ == "EstimationWarning"
 
 
 def signal_label(module: ModuleType, role: str) -> str:
@@ -254,17 +199,6 @@ def signal_label(module: ModuleType, role: str) -> str:
     quantity = "effort" if kind in ("Se", "De") else "flow"
     where = "of the source" if role == "input" else "at the detector"
     return f"{role}: {quantity} {where} {name} ({label})"
-
-
-def say(text: str, *, stderr: bool = False) -> None:
-    """Print a result or a note, the estimators' advice named as this command line's options
-    (`hold='zoh'` is `--hold zoh` here)."""
-    print(for_command_line(text), file=sys.stderr if stderr else sys.stdout)
-
-
-def warn(command: str, texts) -> None:
-    for text in texts:
-        say(f"mtt {command}: warning: {text}", stderr=True)
 
 
 def cmd_compile(args) -> int:
@@ -289,7 +223,7 @@ def cmd_compile(args) -> int:
 def cmd_simulate(args) -> int:
     from mtt.present import plots  # matplotlib: a quarter second, paid by plotting only
 
-    module = _model(args)
+    module = module_for(args)
     (data,) = experiment_data(module, args)
     if args.data_plot:
         plots.data(
@@ -299,7 +233,7 @@ def cmd_simulate(args) -> int:
         )  # fmt: skip
     if args.csv:
         codegen.write_atomic(
-            args.csv, _csv_text(["t", "u", "y"], zip(data.t, data.u, data.y, strict=True))
+            args.csv, tables.csv_text(["t", "u", "y"], zip(data.t, data.u, data.y, strict=True))
         )
     if args.json:
         arrays = {name: getattr(data, name).tolist() for name in ("t", "u", "y")}
@@ -308,15 +242,5 @@ def cmd_simulate(args) -> int:
     elif args.csv:
         print(f"wrote {args.csv}: {data.note}")
     elif not args.data_plot:
-        sys.stdout.write(_csv_text(["t", "u", "y"], zip(data.t, data.u, data.y, strict=True)))
+        sys.stdout.write(tables.csv_text(["t", "u", "y"], zip(data.t, data.u, data.y, strict=True)))
     return EXIT_OK
-
-
-def _rows(rows: list[tuple[str, ...]]) -> list[str]:
-    widths = [max(len(row[i]) for row in rows) for i in range(len(rows[0]))]
-    return [
-        (
-            "  " + "  ".join(cell.ljust(width) for cell, width in zip(row, widths, strict=True))
-        ).rstrip()
-        for row in rows
-    ]

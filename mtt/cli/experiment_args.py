@@ -10,7 +10,6 @@ from __future__ import annotations
 import argparse
 from collections.abc import Callable
 
-from mtt.cli import batch
 from mtt.cli.options import BoundsAction, add_parameter_options, given, named_values
 
 DEFAULT_T_END, DEFAULT_DT, DEFAULT_SEED = 10.0, 0.01, 0
@@ -23,10 +22,10 @@ def _implementation(name: str, module: str = "experiment") -> Callable[[argparse
     def run(args: argparse.Namespace) -> int:
         import importlib
 
-        from mtt.cli import experiment
+        from mtt.cli.running import guarded
 
         implementation = importlib.import_module(f"mtt.cli.{module}")
-        return experiment.guarded(getattr(implementation, name))(args)
+        return guarded(getattr(implementation, name))(args)
 
     return run
 
@@ -113,6 +112,31 @@ def _filter_options(group, several: bool, default: str | None) -> None:
         nargs="+" if several else None,
         metavar="T",
         help="the filter(s) (1 + sT)^(n+1)",
+    )
+
+
+def _batch_options(parser: argparse.ArgumentParser) -> None:
+    """The fit command's options for many records (mtt/cli/batch.py runs them)."""
+    group = parser.add_argument_group(
+        "many records",
+        "--data takes glob patterns ('logs/*.csv'): each record is then fitted on its own "
+        "(files named one by one are combined into one fit); the options below choose",
+    )
+    mode = group.add_mutually_exclusive_group()
+    mode.add_argument(
+        "--per-record", action="store_true", help="fit each --data record on its own (a table)"
+    )
+    mode.add_argument(
+        "--pooled", action="store_true", help="fit all --data records together (moments add)"
+    )
+    where = group.add_mutually_exclusive_group()
+    where.add_argument(
+        "--jobs", type=int, metavar="N", help="worker processes (default 1: this process)"
+    )
+    where.add_argument(
+        "--scheduler",
+        metavar="ADDRESS",
+        help="run on a dask.distributed scheduler (tcp://host:8786; pip install 'mtt[dask]')",
     )
 
 
@@ -276,5 +300,5 @@ def register(commands) -> None:
         help="write t, u, y, the fitted output and the residual (per record: the table)",
     )
     outputs.add_argument("--json", action="store_true", help="print the result as JSON")
-    batch.add_options(fit)
+    _batch_options(fit)
     fit.set_defaults(run=_implementation("cmd_fit", "fitting"))

@@ -10,41 +10,11 @@ from __future__ import annotations
 import json
 import re
 
-import numpy as np
-
-from mtt.cli import unknowns
-from mtt.cli.experiment import (
-    EXIT_OK,
-    EXIT_STOPPED,
-    UsageError,
-    _csv_text,
-    _model,
-    experiment_data,
-    hold_of,
-    say,
-    signal_label,
-    warn,
-)
+from mtt.cli.experiment import experiment_data, module_for, signal_label
+from mtt.cli.fit_options import options
+from mtt.cli.running import EXIT_OK, EXIT_STOPPED, UsageError, say, warn
 from mtt.estimator import codegen
-
-
-def options(module, args) -> dict:
-    """The module's `fit` options from the command line (k0 and bounds by unknown)."""
-    return dict(
-        method=args.method, C=_filter(args),
-        k0=None if args.k0 is None else unknowns.point(module, args.k0, "--k0"),
-        bounds=unknowns.bounds(module, args.bounds), offset=args.offset,
-        initial_state=args.initial_state, hold=hold_of(args), beta=args.beta,
-    )  # fmt: skip
-
-
-def _filter(args):
-    """C for the module's `fit`: --filter-T T, --filter TEXT ("auto" by default)."""
-    if args.filter is not None and args.filter_T is not None:
-        raise UsageError("--filter and --filter-T do not go together")
-    if args.filter_T is not None:
-        return args.filter_T
-    return "auto" if args.filter is None else args.filter.strip()
+from mtt.present import fits, tables
 
 
 def cmd_fit(args) -> int:
@@ -53,7 +23,7 @@ def cmd_fit(args) -> int:
     kind = batch.mode(args)  # --data patterns, --per-record, --jobs...: mtt.batch
     if kind is not None:
         return batch.cmd_fit_many(args, kind)
-    module = _model(args)
+    module = module_for(args)
     records = experiment_data(module, args, several=True)
     arrays = [[getattr(data, name) for data in records] for name in ("t", "u", "y")]
     if len(records) == 1:
@@ -74,7 +44,8 @@ def cmd_fit(args) -> int:
         ]
         plots.fit(
             args.plot, shown, output_label=signal_label(module, "output"), dpi=args.dpi,
-            title=f"{module.MODEL}: {_estimates(module, result)}, fit {result.fit_percent:.4g} %",
+            title=f"{module.MODEL}: {fits.estimates(module, result)}, "
+            f"fit {result.fit_percent:.4g} %",
         )  # fmt: skip
     elif args.plot:
         warn("fit", [f"no plot: {result.message}"])
@@ -85,14 +56,14 @@ def cmd_fit(args) -> int:
             for t, u, y, fitted in zip(data.t, data.u, data.y, fitted, strict=True)
         )
         codegen.write_atomic(
-            args.csv, _csv_text(["record", "t", "u", "y", "fitted", "residual"], rows)
+            args.csv, tables.csv_text(["record", "t", "u", "y", "fitted", "residual"], rows)
         )
     if args.json:
         record = {"model": module.MODEL, "unknown": module.UNKNOWN, **module.fit_record(result)}
         record["data"] = [data.note for data in records]
         say(json.dumps(record))
     else:
-        say(_text(module, records, result))
+        say(fits.fit_text(module, records, result))
     return EXIT_OK if result.ok else EXIT_STOPPED
 
 
@@ -108,52 +79,3 @@ def _files_named(message: str, records) -> str:
         ),
         message,
     )
-
-
-def _estimates(module, result) -> str:
-    """`k = 10 ± 0.02`, or `ra = 1 ± 0.01, jl = 10 ± 0.2` for several unknowns."""
-    return ", ".join(
-        f"{name} = {value:.6g} \u00b1 {se:.3g}"
-        for name, value, se in zip(
-            module.UNKNOWNS, np.atleast_1d(result.k), np.atleast_1d(result.k_se), strict=True
-        )  # fmt: skip
-    )
-
-
-def uncertainty_lines(module, k, k_se, ci, indent: str = "  ") -> list[str]:
-    """A line per unknown: its estimate, standard error and 95 % interval."""
-    return [
-        f"{indent}{name} = {value:.6g} \u00b1 {se:.3g} (standard error; 95 % interval "
-        f"{low:.6g} to {high:.6g})"
-        for name, value, se, (low, high) in zip(
-            module.UNKNOWNS,
-            np.atleast_1d(k),
-            np.atleast_1d(k_se),
-            np.reshape(ci, (-1, 2)),
-            strict=True,
-        )  # fmt: skip
-    ]
-
-
-def _text(module, records, result) -> str:
-    sources = "; ".join(data.note for data in records)
-    lines = [f"{module.MODEL}: {sources}"]
-    if not result.ok:
-        lines.append(f"  no estimate: {result.message}")
-        return "\n".join(lines)
-    method = "refined instrumental variables" if result.method == "iv" else "least squares"
-    steps = f", {result.iterations} iterations" if result.method == "iv" else ""
-    lines += uncertainty_lines(module, result.k, result.k_se, result.ci)
-    if len(module.UNKNOWNS) == 1:
-        minima = ", ".join(f"{value:.6g}" for value in result.minima)
-    else:
-        minima = "; ".join(f"({unknowns.text(module, point, '.6g')})" for point in result.minima)
-    minima = minima or "none within the bounds"
-    lines += [
-        f"  fit {result.fit_percent:.4g} %, residual RMS {result.residual_rms:.3g}, "
-        f"noise std {result.noise_std:.3g}",
-        f"  method: {method}{steps}; local minima of the criterion: {minima}",
-    ]
-    if any(result.offsets):
-        lines.append("  output offset at rest: " + ", ".join(f"{v:.6g}" for v in result.offsets))
-    return "\n".join(lines)

@@ -11,22 +11,16 @@ import sys
 from dataclasses import replace
 from typing import TYPE_CHECKING
 
+from mtt.cli import loading
 from mtt.cli.options import add_parameter_options
 from mtt.language.diagnostics import MttError
 
 if TYPE_CHECKING:
-    from mtt.derivation.identifiability import Identifiability
     from mtt.derivation.parameters import ParameterChoice
-    from mtt.derivation.theta import Theta
     from mtt.language.bondgraph import BondGraph
     from mtt.language.diagnostics import Diagnostic
 
 EXIT_OK = 0
-VERDICTS = {
-    "global": "globally identifiable",
-    "local": "locally identifiable",
-    "none": "not identifiable",
-}
 
 
 def register(commands) -> None:
@@ -45,98 +39,23 @@ def register(commands) -> None:
 
 
 def cmd_identifiability(args) -> int:
-    from mtt.cli.main import _equations
     from mtt.derivation.identifiability import identifiability
     from mtt.derivation.pipeline import NO_UNKNOWN
     from mtt.derivation.theta import theta_matrix
     from mtt.derivation.transfer import transfer_function
     from mtt.language.diagnostics import ModelError
+    from mtt.present.identifiability import identifiability_json, identifiability_text
 
-    equations = _equations(args, identify=True)
+    equations = loading.equations(args, identify=True)
     theta = theta_matrix(transfer_function(equations))
     if not theta.unknowns:
         raise ModelError(equations.causal.bondgraph.source, [NO_UNKNOWN])
     result = identifiability(theta)
-    print(json.dumps(to_json(theta, result)) if args.json else text(theta, result))
-    return EXIT_OK
-
-
-def _number(value) -> str:
-    """An exact value in the language's syntax; an approximate one to 15 digits."""
-    from mtt.derivation.identifiability import expression_text
-
-    if value.is_Rational:
-        return expression_text(value)
-    real, imaginary = (float(part) for part in value.as_real_imag())
-    return f"{real:.15g}" if imaginary == 0 else f"{real:.15g}{imaginary:+.15g}i"
-
-
-def text(theta: Theta, result: Identifiability) -> str:
-    from mtt.derivation.identifiability import expression_text, point_text
-
-    names = ", ".join(result.unknowns)
-    several = len(result.unknowns) > 1
-    values = f"({names})" if several else names
-    lines = [
-        f"model {theta.model}: from {theta.input} to {theta.output}; "
-        f"unknown{'s' * several} {names}",
-        VERDICTS[result.verdict],
-    ]
-    if result.verdict == "global":
-        lines[-1] += f": the transfer function determines {names}"
-        return "\n".join(lines)
-    if result.verdict == "local":
-        lines[-1] += (
-            f": for generic true values {values}, {result.solutions} values give the same "
-            "transfer function:"
-        )
-        lines += [f"  {point_text(m)}" for m in result.maps]
-        others = result.solutions - len(result.maps)
-        if others:
-            lines.append(f"  and {others} more, algebraic (not rational) in the true values")
-        if result.points:
-            model = all(theta.true_values.get(n) == v for n, v in result.point.items())
-            lines.append(
-                f"for {'the model' + chr(39) + 's' if model else 'random'} values {values} = "
-                f"{point_text(result.point, _number)} they are ({result.real} real, "
-                f"{result.positive} positive):"
-            )
-            lines += [f"  {point_text(p, _number)}" for p in result.points]
+    if args.json:
+        print(json.dumps(identifiability_json(theta, result)))
     else:
-        lines[-1] += (
-            f": for generic true values, a {len(result.unknowns) - result.rank}-parameter "
-            f"family of values of {values} gives the same transfer function"
-        )
-    combinations = ", ".join(expression_text(c) for c in result.combinations)
-    lines.append(f"the data determine: {combinations or 'nothing'}")
-    lines.append(
-        f"identified on {'their' if several else 'its'} own: "
-        f"{', '.join(result.identified) or 'none'}"
-    )
-    return "\n".join(lines)
-
-
-def to_json(theta: Theta, result: Identifiability) -> dict:
-    """The `identifiability --json` record (its shape is a public contract)."""
-    from mtt.derivation.identifiability import expression_text
-
-    return {
-        "ok": True,
-        "model": theta.model,
-        "input": theta.input,
-        "output": theta.output,
-        "unknowns": list(result.unknowns),
-        "verdict": result.verdict,
-        "rank": result.rank,
-        "solutions": result.solutions,
-        "identified": list(result.identified),
-        "combinations": [expression_text(c) for c in result.combinations],
-        "maps": [{n: expression_text(v) for n, v in m.items()} for m in result.maps],
-        "point": {n: _number(v) for n, v in result.point.items()} if result.point else None,
-        "points": [{n: _number(v) for n, v in p.items()} for p in result.points],
-        "real": result.real if result.points else None,
-        "positive": result.positive if result.points else None,
-    }
+        print(identifiability_text(theta, result))
+    return EXIT_OK
 
 
 def warnings(graph: BondGraph, choice: ParameterChoice) -> list[Diagnostic]:

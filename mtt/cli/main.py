@@ -14,8 +14,7 @@ import sys
 import traceback
 from typing import TYPE_CHECKING
 
-from mtt import __version__
-from mtt.cli import experiment_args, identify, views
+from mtt.cli import experiment_args, identify, loading, views
 from mtt.cli.options import (
     Parser,
     add_parameter_options,
@@ -24,11 +23,10 @@ from mtt.cli.options import (
     selection_from_args,
 )
 from mtt.language.diagnostics import ModelError, MttError
+from mtt.version import __version__
 
 if TYPE_CHECKING:
-    from mtt.derivation.equations import Equations
     from mtt.language.bondgraph import BondGraph
-    from mtt.language.parse import ParsedModel
 
 EXIT_OK, EXIT_MODEL_ERROR, EXIT_BUG = 0, 2, 3
 BUG_REPORT = (
@@ -64,40 +62,6 @@ class _Parser(Parser):
 # check / show -----------------------------------------------------------------
 
 
-def _summary(
-    file: str, parsed: ParsedModel | None, graph: BondGraph | None, problem: ModelError | None
-) -> dict:
-    """The `check --json` record of one file (its shape is a public contract)."""
-    errors = problem.errors if problem else ()
-    warnings = (problem.warnings if problem else ()) + (graph.warnings if graph else ())
-    record = {
-        "file": file,
-        "ok": problem is None,
-        "errors": [d.to_json() for d in errors],
-        "warnings": [d.to_json() for d in warnings],
-        "model": None, "components": 0, "bonds": 0, "parameters": {}, "unknown": [],
-        "input": None, "output": None,
-    }  # fmt: skip
-    if parsed is not None:
-        record["model"] = parsed.header.name if parsed.header else None
-        record["components"] = len({use.name for use in parsed.mentions})
-        record["bonds"] = len(parsed.bonds)
-        record["parameters"] = {
-            p.name: None if p.value is None else str(p.value) for p in parsed.parameters
-        }
-        record["unknown"] = [p.name for p in parsed.parameters if p.unknown]
-    if graph is not None:
-        record["components"] = len(graph.components)
-        record["bonds"] = len(graph.bonds)
-        record["parameters"] = {
-            p.name: None if p.value is None else str(p.value) for p in graph.parameters.values()
-        }
-        record["input"] = graph.component(graph.input).label
-        record["output"] = graph.component(graph.output).label
-        record["unknown"] = list(graph.unknowns)
-    return record
-
-
 def _check_one(file: str, args) -> tuple[dict, ModelError | None, BondGraph | None, list]:
     """Everything that can be told of a model before algebra: the language's rules, then
     causality and the structure (can the input reach the output, the unknowns matter);
@@ -106,6 +70,7 @@ def _check_one(file: str, args) -> tuple[dict, ModelError | None, BondGraph | No
     from mtt.language.bondgraph import build
     from mtt.language.parse import parse
     from mtt.language.subsystems import read_source
+    from mtt.present.summary import check_record
 
     parsed = graph = problem = None
     notes = []
@@ -117,7 +82,7 @@ def _check_one(file: str, args) -> tuple[dict, ModelError | None, BondGraph | No
             notes = identify.warnings(graph, choice_from_args(args))
     except ModelError as exc:
         problem = exc
-    record = _summary(file, parsed, graph, problem)
+    record = check_record(file, parsed, graph, problem)
     record["warnings"] += [note.to_json() for note in notes]
     return record, problem, graph, notes
 
@@ -148,82 +113,14 @@ def cmd_check(args) -> int:
     return status
 
 
-def _table(rows: list[tuple[str, ...]], indent: str = "  ") -> list[str]:
-    widths = [max(len(r[i]) for r in rows) for i in range(len(rows[0]))]
-    return [
-        (indent + "  ".join(cell.ljust(w) for cell, w in zip(row, widths, strict=True))).rstrip()
-        for row in rows
-    ]
-
-
-def describe(graph: BondGraph) -> str:
-    """A readable summary of a bond graph, for `mtt show`."""
-    from mtt.language.bondgraph import summary_counts
-
-    lines = [f"model {graph.name}" + (f": {graph.description}" if graph.description else "")]
-    lines.append(f"file {graph.source.name}")
-    if graph.parameters:
-        lines += ["", "parameters"]
-        rows = []
-        for p in graph.parameters.values():
-            value = "(no value: symbolic)" if p.value is None else f"= {p.value.value}"
-            role = "unknown" if p.name in graph.unknowns else "known"
-            rows.append((p.name, value, role, p.description or ""))
-        lines += _table(rows)
-    counts = summary_counts(graph)
-    lines += ["", f"components ({sum(counts.values())})"]
-    rows = []
-    for type_name in counts:
-        members = [c for c in graph.components if c.type.name == type_name]
-        names = ", ".join(
-            c.name + (f"({c.argument.value})" if c.argument is not None else "") for c in members
-        )
-        rows.append((type_name, members[0].type.summary, names))
-    lines += _table(rows)
-    lines += ["", f"bonds ({len(graph.bonds)}, tail -> head is the direction of positive power)"]
-    rows = [
-        (str(b.number), graph.component(b.tail).label, "->", graph.component(b.head).label)
-        for b in graph.bonds
-    ]
-    lines += _table(rows)
-    if graph.subsystems:
-        lines += ["", f"subsystems ({len(graph.subsystems)})"]
-        rows = []
-        for sub in graph.subsystems:
-            indent = "  " * sub.name.count(".")
-            bindings = ", ".join(f"{name} = {value.value}" for name, value in sub.bindings)
-            rows.append(
-                (indent + sub.name.rpartition(".")[2], sub.file, bindings and f"({bindings})",
-                 sub.description or "")
-            )  # fmt: skip
-        lines += _table(rows)
-    lines += [
-        "",
-        f"input   {graph.component(graph.input).label}",
-        f"output  {graph.component(graph.output).label}",
-        f"unknown {', '.join(graph.unknowns) or '(none)'}",
-    ]
-    return "\n".join(lines)
-
-
-def _load(args) -> BondGraph:
-    """The file's bond graph; its warnings go to stderr, its errors raise `ModelError`."""
-    from mtt.derivation.pipeline import load
-
-    graph = load(args.file, selection_from_args(args))
-    for note in graph.warnings:
-        print(note.render(), file=sys.stderr)
-    return graph
-
-
 def cmd_show(args) -> int:
-    from mtt.present import report
+    from mtt.present import report, summary
 
-    graph = _load(args)
+    graph = loading.load_graph(args)
     if args.json:
         _print_json(report.show_json(graph))
     else:
-        print(describe(graph))
+        print(summary.describe(graph))
     return EXIT_OK
 
 
@@ -232,7 +129,7 @@ def cmd_causality(args) -> int:
     from mtt.derivation.causality import describe as describe_causality
     from mtt.present import report
 
-    causal = assign(_load(args))
+    causal = assign(loading.load_graph(args))
     if args.json:
         _print_json(report.causality_json(causal))
     else:
@@ -240,26 +137,10 @@ def cmd_causality(args) -> int:
     return EXIT_OK
 
 
-def _equations(args, identify: bool = False) -> Equations:
-    """The equations of the model the arguments name; `identify`: check that its unknowns
-    can be identified (they reach the output)."""
-    from mtt.derivation.pipeline import equations_for
-
-    graph = _load(args)
-    for name, _ in args.overrides:
-        if name in graph.unknowns:
-            print(
-                f"mtt {args.command}: warning: --set {name}=...: {name} is an unknown, which "
-                "stays symbolic here (its value is the true value of simulations)",
-                file=sys.stderr,
-            )
-    return equations_for(graph, choice_from_args(args), identify)
-
-
 def cmd_ss(args) -> int:
     from mtt.present import report
 
-    equations = _equations(args)
+    equations = loading.equations(args)
     if args.json:
         _print_json(report.ss_json(equations))
     else:
@@ -274,7 +155,7 @@ def _derived(args, text, latex) -> int:
     from mtt.language.components import Role
     from mtt.present import report
 
-    equations = _equations(args, identify=args.command == "theta")
+    equations = loading.equations(args, identify=args.command == "theta")
     theta = theta_matrix(transfer_function(equations))
     if args.command == "theta":
         if not theta.unknowns:

@@ -3,14 +3,12 @@
 `--k0`, `--true` and `--bounds` take a bare value for a model with one unknown (`--k0 5`,
 `--bounds 0:20` or `--bounds 0 20`) and values by name for several (`--k0 ra=1,jl=5`,
 `--bounds ra=0.1:10,jl=1:100`; see mtt/cli/options.py). Here they become what the generated
-module takes: a float for one unknown, an array in the order of its UNKNOWNS for several;
-and an estimate becomes text (`ra = 1.2, jl = 9.8`) or JSON (a number, or a list in the
-order of `unknowns`).
+module takes: a float for one unknown, an array in the order of its UNKNOWNS for several
+(mtt/present/values.py writes them back as text and JSON).
 """
 
 from __future__ import annotations
 
-import math
 from types import ModuleType
 
 import numpy as np
@@ -45,30 +43,3 @@ def true_point(module: ModuleType, given):
     if missing:
         return missing
     return point(module, dict(zip(module.UNKNOWNS, values, strict=True)), "--true")
-
-
-def text(module: ModuleType, k, digits: str = "g") -> str:
-    """`5` for one unknown (the tables' columns name it), `ra = 1.2, jl = 9.8` for several."""
-    if len(module.UNKNOWNS) == 1:
-        return format(float(k), digits)
-    return ", ".join(
-        f"{name} = {format(float(value), digits)}"
-        for name, value in zip(module.UNKNOWNS, np.ravel(k), strict=True)
-    )
-
-
-def named(module: ModuleType, k, digits: str = ".6g") -> str:
-    """`k = 5` or `ra = 1.2, jl = 9.8`: the values with their names."""
-    if len(module.UNKNOWNS) == 1:
-        return f"{module.UNKNOWNS[0]} = {format(float(k), digits)}"
-    return text(module, k, digits)
-
-
-def plain(value):
-    """A float for JSON (None where not finite), a list of them for an array or a tuple."""
-    if value is None:
-        return None
-    if isinstance(value, tuple | list) or np.ndim(value) > 0:
-        return [plain(part) for part in value]
-    value = float(value)
-    return value if math.isfinite(value) else None

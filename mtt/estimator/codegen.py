@@ -28,11 +28,11 @@ from pathlib import Path
 import jinja2
 import sympy
 
-from mtt import __version__
 from mtt.derivation.theta import Theta, refuse_cancelled
 from mtt.estimator import advice
 from mtt.language.diagnostics import ModelError, Source, error
 from mtt.resources import resource_dir
+from mtt.version import __version__
 
 # Keyword names of the generated functions: a kept parameter, passed as a keyword
 # argument (`estimate(..., tau=2)`), must not take one of them (tests/test_codegen.py

@@ -1,0 +1,27 @@
+"""The generated module's `fit` options as the command line gives them (`mtt fit`, one
+process or many)."""
+
+from __future__ import annotations
+
+from mtt.cli import unknowns
+from mtt.cli.experiment import hold_of
+from mtt.cli.running import UsageError
+
+
+def options(module, args) -> dict:
+    """The module's `fit` options from the command line (k0 and bounds by unknown)."""
+    return dict(
+        method=args.method, C=_filter(args),
+        k0=None if args.k0 is None else unknowns.point(module, args.k0, "--k0"),
+        bounds=unknowns.bounds(module, args.bounds), offset=args.offset,
+        initial_state=args.initial_state, hold=hold_of(args), beta=args.beta,
+    )  # fmt: skip
+
+
+def _filter(args):
+    """C for the module's `fit`: --filter-T T, --filter TEXT ("auto" by default)."""
+    if args.filter is not None and args.filter_T is not None:
+        raise UsageError("--filter and --filter-T do not go together")
+    if args.filter_T is not None:
+        return args.filter_T
+    return "auto" if args.filter is None else args.filter.strip()

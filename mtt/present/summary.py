@@ -1,0 +1,95 @@
+"""A model at a glance: `mtt show`'s summary and `mtt check --json`'s record of a file."""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING
+
+from mtt.language.bondgraph import summary_counts
+from mtt.present.tables import rows as rows_text
+
+if TYPE_CHECKING:
+    from mtt.language.bondgraph import BondGraph
+    from mtt.language.diagnostics import ModelError
+    from mtt.language.parse import ParsedModel
+
+
+def check_record(
+    file: str, parsed: ParsedModel | None, graph: BondGraph | None, problem: ModelError | None
+) -> dict:
+    """The `check --json` record of one file (its shape is a public contract)."""
+    errors = problem.errors if problem else ()
+    warnings = (problem.warnings if problem else ()) + (graph.warnings if graph else ())
+    record = {
+        "file": file,
+        "ok": problem is None,
+        "errors": [d.to_json() for d in errors],
+        "warnings": [d.to_json() for d in warnings],
+        "model": None, "components": 0, "bonds": 0, "parameters": {}, "unknown": [],
+        "input": None, "output": None,
+    }  # fmt: skip
+    if parsed is not None:
+        record["model"] = parsed.header.name if parsed.header else None
+        record["components"] = len({use.name for use in parsed.mentions})
+        record["bonds"] = len(parsed.bonds)
+        record["parameters"] = {
+            p.name: None if p.value is None else str(p.value) for p in parsed.parameters
+        }
+        record["unknown"] = [p.name for p in parsed.parameters if p.unknown]
+    if graph is not None:
+        record["components"] = len(graph.components)
+        record["bonds"] = len(graph.bonds)
+        record["parameters"] = {
+            p.name: None if p.value is None else str(p.value) for p in graph.parameters.values()
+        }
+        record["input"] = graph.component(graph.input).label
+        record["output"] = graph.component(graph.output).label
+        record["unknown"] = list(graph.unknowns)
+    return record
+
+
+def describe(graph: BondGraph) -> str:
+    """A readable summary of a bond graph, for `mtt show`."""
+    lines = [f"model {graph.name}" + (f": {graph.description}" if graph.description else "")]
+    lines.append(f"file {graph.source.name}")
+    if graph.parameters:
+        lines += ["", "parameters"]
+        rows = []
+        for p in graph.parameters.values():
+            value = "(no value: symbolic)" if p.value is None else f"= {p.value.value}"
+            role = "unknown" if p.name in graph.unknowns else "known"
+            rows.append((p.name, value, role, p.description or ""))
+        lines += rows_text(rows)
+    counts = summary_counts(graph)
+    lines += ["", f"components ({sum(counts.values())})"]
+    rows = []
+    for type_name in counts:
+        members = [c for c in graph.components if c.type.name == type_name]
+        names = ", ".join(
+            c.name + (f"({c.argument.value})" if c.argument is not None else "") for c in members
+        )
+        rows.append((type_name, members[0].type.summary, names))
+    lines += rows_text(rows)
+    lines += ["", f"bonds ({len(graph.bonds)}, tail -> head is the direction of positive power)"]
+    rows = [
+        (str(b.number), graph.component(b.tail).label, "->", graph.component(b.head).label)
+        for b in graph.bonds
+    ]
+    lines += rows_text(rows)
+    if graph.subsystems:
+        lines += ["", f"subsystems ({len(graph.subsystems)})"]
+        rows = []
+        for sub in graph.subsystems:
+            indent = "  " * sub.name.count(".")
+            bindings = ", ".join(f"{name} = {value.value}" for name, value in sub.bindings)
+            rows.append(
+                (indent + sub.name.rpartition(".")[2], sub.file, bindings and f"({bindings})",
+                 sub.description or "")
+            )  # fmt: skip
+        lines += rows_text(rows)
+    lines += [
+        "",
+        f"input   {graph.component(graph.input).label}",
+        f"output  {graph.component(graph.output).label}",
+        f"unknown {', '.join(graph.unknowns) or '(none)'}",
+    ]
+    return "\n".join(lines)

@@ -1,0 +1,162 @@
+"""The package's shape holds: no import cycles in mtt/, no private names used across modules,
+and the command line only parses arguments and dispatches (presentation and data input are
+packages of their own that the API uses too).
+
+Read from the source (the AST of every module, imports inside functions included: a lazy
+import is still a dependency), so that nothing has to be imported to check it.
+"""
+
+from __future__ import annotations
+
+import ast
+from pathlib import Path
+
+import networkx as nx
+import pytest
+
+ROOT = Path(__file__).resolve().parent.parent
+
+
+def find_modules(root: Path) -> dict[str, Path]:
+    """The modules of the package `root`/mtt by dotted name."""
+    found = {}
+    for path in sorted((root / "mtt").rglob("*.py")):
+        parts = path.relative_to(root).with_suffix("").parts
+        found[".".join(parts[:-1] if parts[-1] == "__init__" else parts)] = path
+    return found
+
+
+def _absolute(name: str, package: bool, node: ast.ImportFrom) -> str:
+    """The module an ImportFrom names, relative imports resolved."""
+    if not node.level:
+        return node.module or ""
+    base = name.split(".") if package else name.split(".")[:-1]
+    base = base[: len(base) - (node.level - 1)]
+    return ".".join(base + ([node.module] if node.module else []))
+
+
+def _type_checking(node: ast.If) -> bool:
+    test = node.test
+    return (isinstance(test, ast.Name) and test.id == "TYPE_CHECKING") or (
+        isinstance(test, ast.Attribute) and test.attr == "TYPE_CHECKING"
+    )
+
+
+def _imports(tree: ast.AST):
+    """Every Import and ImportFrom that runs (those under `if TYPE_CHECKING:` do not)."""
+    stack = [tree]
+    while stack:
+        node = stack.pop()
+        if isinstance(node, ast.If) and _type_checking(node):
+            stack.extend(node.orelse)
+            continue
+        if isinstance(node, ast.Import | ast.ImportFrom):
+            yield node
+        stack.extend(ast.iter_child_nodes(node))
+
+
+def _private(name: str) -> bool:
+    return name.startswith("_") and not (name.startswith("__") and name.endswith("__"))
+
+
+def analyse(root: Path) -> tuple[nx.DiGraph, list[str]]:
+    """The graph of imports between the modules of `root`/mtt, and every private name one
+    module takes from another (`from mtt.a import _x`, or `a._x` on an imported module `a`)."""
+    modules = find_modules(root)
+    graph = nx.DiGraph()
+    graph.add_nodes_from(modules)
+    private = []
+    for name, path in modules.items():
+        tree = ast.parse(path.read_text(encoding="utf-8"), filename=str(path))
+        aliases = {}  # a name bound to an mtt module -> that module
+        for node in _imports(tree):
+            where = f"{path.relative_to(root)}:{node.lineno}"
+            if isinstance(node, ast.Import):
+                for alias in node.names:
+                    if alias.name in modules:
+                        graph.add_edge(name, alias.name)
+                        aliases[alias.asname or alias.name] = alias.name
+                continue
+            source = _absolute(name, path.name == "__init__.py", node)
+            if source not in modules:
+                continue
+            for alias in node.names:
+                submodule = f"{source}.{alias.name}"
+                if submodule in modules:
+                    graph.add_edge(name, submodule)
+                    aliases[alias.asname or alias.name] = submodule
+                    continue
+                graph.add_edge(name, source)
+                if _private(alias.name) and source != name:
+                    private.append(f"{where}: {alias.name} from {source}")
+        for node in ast.walk(tree):
+            if (
+                isinstance(node, ast.Attribute)
+                and isinstance(node.value, ast.Name)
+                and node.value.id in aliases
+                and aliases[node.value.id] != name
+                and _private(node.attr)
+            ):
+                where = f"{path.relative_to(root)}:{node.lineno}"
+                private.append(f"{where}: {node.attr} of {aliases[node.value.id]}")
+    graph.remove_edges_from(nx.selfloop_edges(graph))
+    return graph, private
+
+
+MODULES = find_modules(ROOT)
+GRAPH, PRIVATE = analyse(ROOT)
+
+
+def test_no_import_cycles_in_mtt():
+    cycles = [" -> ".join([*cycle, cycle[0]]) for cycle in nx.simple_cycles(GRAPH)]
+    assert not cycles, "import cycles:\n" + "\n".join(sorted(cycles))
+
+
+def test_no_private_name_is_used_across_modules():
+    assert not PRIVATE, "private names used across modules:\n" + "\n".join(PRIVATE)
+
+
+def test_only_the_command_line_imports_the_command_line():
+    outside = [
+        f"{name} imports {target}"
+        for name, target in GRAPH.edges
+        if target.startswith("mtt.cli") and not name.startswith("mtt.cli")
+        and name != "mtt.__main__"
+    ]  # fmt: skip
+    assert not outside, "\n".join(outside)
+
+
+def test_modules_stay_small():
+    """A module over ~400 lines is a sign to split it (the developers' guide)."""
+    long = {
+        str(path.relative_to(ROOT)): lines
+        for path in MODULES.values()
+        if (lines := len(path.read_text(encoding="utf-8").splitlines())) > 420
+    }
+    assert not long, long
+
+
+CYCLE = {
+    "mtt/__init__.py": "",
+    "mtt/a.py": "from mtt import b\n",
+    "mtt/b.py": "def f():\n    from mtt.c import _helper\n",
+    "mtt/c.py": "import mtt.a\n_helper = 1\n",
+    "mtt/d.py": "from typing import TYPE_CHECKING\nif TYPE_CHECKING:\n    from mtt import a\n"
+    "from mtt import c\nx = c._helper\n",
+}
+
+
+@pytest.mark.parametrize("lazy", [True, False])
+def test_the_checks_find_a_cycle_and_a_private_name(tmp_path, lazy):
+    """The checks themselves: a cycle through a lazy import, and private names taken both
+    ways, are found; an import under TYPE_CHECKING is not a dependency."""
+    for relative, text in CYCLE.items():
+        path = tmp_path / relative
+        path.parent.mkdir(exist_ok=True)
+        path.write_text(text if lazy else text.replace("def f():\n    ", ""))
+    graph, private = analyse(tmp_path)
+    assert list(nx.simple_cycles(graph)) and not graph.has_edge("mtt.d", "mtt.a")
+    assert [line.split(": ", 1)[1] for line in private] == [
+        "_helper from mtt.c",
+        "_helper of mtt.c",
+    ]
