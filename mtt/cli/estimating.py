@@ -135,9 +135,8 @@ def cmd_estimate(args) -> int:
         codegen.write_atomic(args.csv, estimates.trajectories_csv(module, runs))
     for run in runs:
         for kind, text in estimates.notes(module, run):
-            start = (
-                f"k0 = {values.text(module, run.k0)}" if several else estimates.start_text(module, run)
-            )
+            start = estimates.start_text(module, run)
+            start = f"k0 = {values.text(module, run.k0)}" if several else start
             say(f"mtt estimate: {kind}: {start}, C(s) = {run.filter}: {text}", stderr=True)
     for text in dict.fromkeys(text for run in runs for text in run.result.warnings):
         warn("estimate", [text])
