@@ -50,7 +50,7 @@ def test_per_record_on_the_cluster_equals_this_process(dc_drive, logs, client):
     imported = client.run(lambda: sorted(name for name in sys.modules if name.startswith("mtt")))
     for names in imported.values():
         assert names == ["mtt", "mtt.batch", "mtt.batch.worker", "mtt.language",
-                         "mtt.language.diagnostics"]  # fmt: skip
+                         "mtt.language.diagnostics", "mtt.version"]  # fmt: skip
     assert not any(client.run(lambda: "sympy" in sys.modules).values())
 
 
