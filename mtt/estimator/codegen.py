@@ -57,7 +57,7 @@ def _fail(theta: Theta, kind: str, message: str, name: str | None = None) -> Mod
     return ModelError(theta.source or Source(theta.source_name, ""), [error(kind, message, place)])
 
 
-def _shadows(name: str) -> bool:
+def shadows(name: str) -> bool:
     """Whether an estimator module of this name would shadow a module for code run beside
     it: one of the standard library's, or one installed (numpy, scipy, ...), or a name
     Python gives a meaning wherever it is (__init__, __main__, sitecustomize). The current
@@ -74,11 +74,11 @@ def _shadows(name: str) -> bool:
 
 def _check(theta: Theta) -> None:
     """Reject what the generated module could not carry safely or use meaningfully."""
-    if not (isinstance(theta.model, str) and _is_name(theta.model, dotted=False)):
+    if not (isinstance(theta.model, str) and is_name(theta.model, dotted=False)):
         raise _fail(
             theta, "bad_name", f"the model name {theta.model!r} is not a Python identifier", ""
         )
-    if _shadows(theta.model):
+    if shadows(theta.model):
         raise _fail(
             theta,
             "reserved_name",
@@ -88,7 +88,7 @@ def _check(theta: Theta) -> None:
         )
     for role, names in (("unknown", theta.unknowns), ("parameter", theta.symbols)):
         for name in names:
-            if not _is_name(name):
+            if not is_name(name):
                 raise _fail(
                     theta,
                     "bad_name",
@@ -109,7 +109,7 @@ def _check(theta: Theta) -> None:
     refuse_cancelled(theta)
 
 
-def _is_name(name: str, dotted: bool = True) -> bool:
+def is_name(name: str, dotted: bool = True) -> bool:
     """A model-derived name the generated code may carry (as a string, through repr): an
     identifier that is no keyword, or (`dotted`) a subsystem's dotted path of them."""
     parts = name.split(".") if dotted else [name]
@@ -228,7 +228,7 @@ def _literal(text: str | None, width: int = 76) -> str:
 
 
 @cache
-def _environment() -> jinja2.Environment:
+def environment() -> jinja2.Environment:
     environment = jinja2.Environment(
         loader=jinja2.FileSystemLoader(resource_dir("templates")),
         undefined=jinja2.StrictUndefined,
@@ -322,7 +322,7 @@ def _context(theta: Theta) -> dict:
 
 def render(theta: Theta) -> str:
     """The generated module's source text for `theta` (deterministic)."""
-    return _environment().get_template("estimator.py.j2").render(_context(theta))
+    return environment().get_template("estimator.py.j2").render(_context(theta))
 
 
 def default_path(theta: Theta) -> Path:
@@ -339,7 +339,7 @@ def output_path(given: str | None, theta: Theta) -> Path:
     path = Path(given)
     if path.is_dir() or given.endswith(("/", os.sep)):
         return path / default_path(theta).name
-    if path.suffix == ".py" and path.stem != theta.model and _shadows(path.stem):
+    if path.suffix == ".py" and path.stem != theta.model and shadows(path.stem):
         raise _fail(
             theta,
             "reserved_name",
@@ -390,16 +390,20 @@ def write_atomic(path: str | Path, data: str | bytes) -> None:
 
 def load(theta: Theta) -> types.ModuleType:
     """The generated module for `theta`, imported without writing a file: what `mtt
-    simulate/estimate` and `Model.estimator()` run.
+    simulate/estimate` and `Model.estimator()` run (see `load_source`)."""
+    return load_source(theta.model, render(theta))
+
+
+def load_source(model: str, text: str) -> types.ModuleType:
+    """A generated module's source text run as the module `_mtt_generated_MODEL`.
 
     The source is the same text `mtt compile` writes (see the module docstring for why
-    running it is safe), run as the module `_mtt_generated_MODEL`, registered in
-    sys.modules so that its dataclasses find their own module, and in linecache under
-    the name `<_mtt_generated_MODEL>` so that tracebacks, warnings and inspect show its
-    lines. Loading the same source again gives the module already loaded.
+    running it is safe), registered in sys.modules so that its dataclasses find their
+    own module, and in linecache under the name `<_mtt_generated_MODEL>` so that
+    tracebacks, warnings and inspect show its lines. Loading the same source again gives
+    the module already loaded.
     """
-    name = f"_mtt_generated_{theta.model}"
-    text = render(theta)
+    name = f"_mtt_generated_{model}"
     loaded = sys.modules.get(name)
     if loaded is not None and getattr(loaded, "_mtt_source", None) == text:
         return loaded  # the same module: objects made by it still pickle as its own

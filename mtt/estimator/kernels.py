@@ -1,0 +1,197 @@
+"""Nonlinear state equations -> the straight-line Python kernels of a generated simulator.
+
+A kernel is a function of plain positional arguments (the states x0.., the input u, the
+unknowns k0.., the kept parameters c0.., the branch modes m0..) whose body is the
+expressions' common subexpressions, computed once (sympy.cse), then a tuple of results.
+The same text runs on floats (bound to `math`) and on numpy arrays of any shape (bound to
+numpy): one integrator steps a single record with Python floats, another a batch of
+parameter sets with arrays.
+
+Nonsmooth functions (abs, sign, min, max) are *frozen*: each occurrence becomes a
+polynomial in a mode m = +-1 that selects its branch (abs(a) -> m a, max(a, b) ->
+(1 + m)/2 a + (1 - m)/2 b), and its switching function s (a, or a - b) says where the branch
+changes. Within a mode the right-hand side is smooth, so the integrators step it at full
+order and locate the crossings of s (events) between steps; the Jacobians are those of
+the branch in force. Only names made here reach the text: a model's names never do.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import sympy
+from sympy.printing.pycode import PythonCodePrinter
+
+# The functions a kernel may call: the model language's smooth functions, the inverses the
+# derivation writes, and pow_ for a power that is neither an integer nor +-1/2. Each is
+# bound to math's function (floats) or numpy's (arrays) by the generated module.
+FUNCTIONS = ("sqrt", "exp", "log", "sin", "cos", "tan", "tanh", "atan", "asin", "acos", "atanh")
+CONSTANTS = {sympy.pi: "pi", sympy.E: "e"}
+
+
+class KernelError(ValueError):
+    """The equations hold something a kernel cannot compute (an unknown function, a
+    symbol that is no state, input, unknown or kept parameter)."""
+
+
+@dataclass(frozen=True)
+class Switch:
+    """One nonsmooth site: its kind ("abs", "sign", "max", "min") and its switching
+    function in frozen form (it may read the modes of the sites inside it)."""
+
+    kind: str
+    function: sympy.Expr
+
+    @property
+    def continuous(self) -> bool:
+        """Whether the right-hand side is continuous where the branch changes (a kink,
+        not a jump): then crossing it leaves the sensitivities continuous too."""
+        return self.kind != "sign"
+
+
+@dataclass(frozen=True)
+class Frozen:
+    """Expressions with their nonsmooth sites replaced by mode polynomials."""
+
+    expressions: tuple[sympy.Expr, ...]
+    switches: tuple[Switch, ...]
+    modes: tuple[sympy.Symbol, ...]
+
+
+def freeze(expressions: list[sympy.Expr]) -> Frozen:
+    """Replace every abs, sign, min and max (innermost first) by its mode polynomial."""
+    sites: dict[tuple[str, tuple[sympy.Expr, ...]], sympy.Symbol] = {}
+    switches: list[Switch] = []
+    modes: list[sympy.Symbol] = []
+
+    def mode(kind: str, function: sympy.Expr, key: tuple) -> sympy.Symbol:
+        if key not in sites:
+            symbol = sympy.Symbol(f"m{len(modes)}")
+            sites[key] = symbol
+            modes.append(symbol)
+            switches.append(Switch(kind, function))
+        return sites[key]
+
+    def walk(expr: sympy.Expr) -> sympy.Expr:
+        if not expr.args:
+            return expr
+        args = [walk(arg) for arg in expr.args]
+        if isinstance(expr, sympy.Abs):
+            return mode("abs", args[0], ("abs", tuple(args))) * args[0]
+        if isinstance(expr, sympy.sign):
+            return mode("sign", args[0], ("sign", tuple(args)))
+        if isinstance(expr, sympy.Max | sympy.Min):
+            kind = "max" if isinstance(expr, sympy.Max) else "min"
+            ordered = sorted(args, key=sympy.default_sort_key)  # a deterministic fold
+            value = ordered[0]
+            for arg in ordered[1:]:
+                m = mode(kind, value - arg, (kind, (value, arg)))
+                if kind == "min":
+                    m = -m
+                # exact in floating point: the factors are 1 and 0
+                value = (1 + m) / 2 * value + (1 - m) / 2 * arg
+            return value
+        if isinstance(expr, sympy.Piecewise | sympy.Heaviside):
+            raise KernelError(f"{type(expr).__name__} is not supported in a simulator: {expr}")
+        return expr.func(*args)
+
+    frozen = tuple(walk(sympy.sympify(e)) for e in expressions)
+    return Frozen(frozen, tuple(switches), tuple(modes))
+
+
+class _Printer(PythonCodePrinter):
+    """Python text with bare function names (bound by the generated module) and names from
+    `names`; every other symbol is an error."""
+
+    def __init__(self, names: dict[sympy.Symbol, str]):
+        super().__init__({"fully_qualified_modules": False, "standard": "python3"})
+        self.names = names
+
+    def _print_Symbol(self, expr):
+        if expr not in self.names:
+            raise KernelError(f"the symbol {expr} is no state, input, unknown or parameter")
+        return self.names[expr]
+
+    def _print_Pow(self, expr, rational=False):
+        if not expr.free_symbols:
+            return self._constant(expr)
+        base, power = expr.args
+        if power.is_Integer or power in (sympy.S.Half, -sympy.S.Half):
+            return super()._print_Pow(expr, rational)
+        return f"pow_({self._print(base)}, {self._print(power)})"  # math.pow: no complex
+
+    def _constant(self, expr) -> str:
+        """A number such as sqrt(6), computed here to full precision."""
+        value = sympy.N(expr, 30)
+        if not (value.is_real and value.is_finite):
+            raise KernelError(f"the constant {expr} is not a finite real number")
+        return f"({float(value)!r})"
+
+    def _print_Function(self, expr):
+        if not expr.free_symbols:
+            return self._constant(expr)
+        name = type(expr).__name__
+        if name not in FUNCTIONS:
+            raise KernelError(f"the function {name} cannot be simulated")
+        return f"{name}({', '.join(self._print(a) for a in expr.args)})"
+
+    def _print_NumberSymbol(self, expr):
+        return CONSTANTS[expr]
+
+    def _print_Exp1(self, expr):
+        return "e"
+
+    def _print_Float(self, expr):
+        return repr(float(expr))
+
+    def _print_Rational(self, expr):
+        return repr(float(expr))
+
+    def _print_ImaginaryUnit(self, expr):
+        raise KernelError("the equations are complex (an imaginary unit): not simulated")
+
+    def _print_Infinity(self, expr):
+        raise KernelError("the equations hold an infinite constant")
+
+    _print_NegativeInfinity = _print_ComplexInfinity = _print_NaN = _print_Infinity
+
+
+@dataclass(frozen=True)
+class Kernel:
+    """A kernel's text: `def name(arguments): body; return (results)`."""
+
+    name: str
+    arguments: tuple[str, ...]
+    body: tuple[str, ...]  # lines "w3 = ..."
+    results: tuple[str, ...]
+
+    def source(self, indent: str = "    ") -> str:
+        lines = [f"def {self.name}({', '.join(self.arguments)}):"]
+        lines += [indent + line for line in self.body]
+        results = "".join(f"{result}, " for result in self.results).rstrip()
+        lines.append(indent + f"return ({results})")
+        return "\n".join(lines)
+
+
+def kernel(
+    name: str,
+    arguments: list[sympy.Symbol],
+    expressions: list[sympy.Expr],
+    names: dict[sympy.Symbol, str],
+) -> Kernel:
+    """The kernel computing `expressions` from `arguments` (all named in `names`)."""
+    for expr in expressions:
+        for call in sympy.sympify(expr).atoms(sympy.Function):
+            if type(call).__name__ not in FUNCTIONS:
+                raise KernelError(f"the function {type(call).__name__} cannot be simulated")
+    temporaries = sympy.numbered_symbols("w")
+    replacements, reduced = sympy.cse(list(expressions), symbols=temporaries, optimizations=None)
+    names = dict(names)
+    body = []
+    printer = _Printer(names)
+    for symbol, value in replacements:
+        text = printer.doprint(value)
+        names[symbol] = symbol.name
+        body.append(f"{symbol.name} = {text}")
+    results = tuple(printer.doprint(e) for e in reduced)
+    return Kernel(name, tuple(names[a] for a in arguments), tuple(body), results)

@@ -1,0 +1,252 @@
+"""The generated nonlinear simulator (issue 19 item 5) against independent references:
+its kernels against sympy's own evaluation of the equations, its simulations against
+scipy's solve_ivp on hand-written right-hand sides at tight tolerances (with solve_ivp's
+own event location for the overflow), its sensitivities against central finite
+differences of its simulations."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+import sympy
+from nonlinear_models import PENDULUM_K, TWO_TANKS_K, pendulum, two_tanks
+from scipy.integrate import solve_ivp
+
+from mtt.derivation.nonlinear import NonlinearStateSpace
+from mtt.estimator import nonlinear_codegen
+from mtt.language.diagnostics import ModelError
+
+TANKS_VALUES = dict(zip(("c1", "c2", "kp"), TWO_TANKS_K, strict=True))
+
+
+@pytest.fixture(scope="module")
+def tanks():
+    return nonlinear_codegen.load(two_tanks(), true_values=TANKS_VALUES)
+
+
+@pytest.fixture(scope="module")
+def arm():
+    return nonlinear_codegen.load(pendulum(), true_values=dict(J=0.05, fc=0.1))
+
+
+def _record(n: int = 401, span: float = 200.0, period: int = 40, seed: int = 0):
+    """A pump signal that switches between 0.2 and 1 (the upper tank overflows at 1)."""
+    t = np.linspace(0.0, span, n)
+    bits = np.random.default_rng(seed).integers(0, 2, n // period + 1)
+    return t, 0.2 + 0.8 * np.repeat(bits, period)[:n]
+
+
+def _tanks_rhs(k, t, u, hold):
+    c1, c2, kp = k
+
+    def rhs(time, x):
+        j = min(max(int(np.searchsorted(t, time, side="right")) - 1, 0), t.size - 2)
+        uu = u[j] if hold == "zoh" else u[j] + (time - t[j]) * (u[j + 1] - u[j]) / (t[j + 1] - t[j])
+        h1, h2 = x[0], x[1] / 1.5
+        return [
+            kp * uu - c1 * math.sqrt(h1) - 2 * max(h1 - 3, 0.0),
+            c1 * math.sqrt(h1) - c2 * math.sqrt(h2),
+        ]
+
+    return rhs
+
+
+def _reference(rhs, t, x0, events=None):
+    """States at every sample, one solve_ivp per sample interval (DOP853, rtol 1e-12), and
+    the times events fired."""
+    x, xs, fired = np.array(x0, dtype=float), [np.array(x0, dtype=float)], []
+    for a, b in zip(t[:-1], t[1:], strict=True):
+        run = solve_ivp(rhs, (a, b), x, method="DOP853", rtol=1e-12, atol=1e-14, events=events)
+        if events is not None:
+            fired += run.t_events[0].tolist()
+        x = run.y[:, -1]
+        xs.append(x)
+    return np.array(xs), fired
+
+
+def _crossing(time, x):
+    return x[0] - 3.0
+
+
+@pytest.mark.parametrize("hold", ["zoh", "linear"])
+def test_two_tanks_match_a_tight_reference_and_locate_every_overflow(tanks, hold):
+    t, u = _record()
+    x0 = [1.0, 1.0]
+    y = tanks.simulate(t, u, x0=x0, hold=hold, rtol=1e-11, atol=1e-13)
+    run = tanks.sensitivities(t, u, x0=x0, hold=hold, rtol=1e-11, atol=1e-13)
+    states, fired = _reference(_tanks_rhs(TWO_TANKS_K, t, u, hold), t, x0, _crossing)
+    assert np.max(np.abs(y - states[:, 1] / 1.5)) < 1e-9 * np.max(np.abs(y))
+    assert np.max(np.abs(run.x - states)) < 1e-9 * np.max(np.abs(states))
+    assert len(fired) >= 3  # the record overflows, stops, and overflows again
+    assert [event[0] for event in run.events] == pytest.approx(fired, abs=1e-8)
+    assert [event[2] for event in run.events] == [(-1.0) ** (i + 1) for i in range(len(fired))]
+
+
+def test_pendulum_matches_a_tight_reference(arm):
+    t = np.linspace(0.0, 10.0, 501)
+    u = arm.input_signal("multisine", t, amplitude=3.0, period=5.0)
+    J, fc = PENDULUM_K
+
+    def rhs(time, x):
+        uu = np.interp(time, t, u)
+        i, w = 20 * x[0], x[1] / J
+        return [uu - i - w / 2, i / 2 - math.sin(x[2]) / 2 - fc * math.tanh(50 * w) - w / 100, w]
+
+    states, _ = _reference(rhs, t, [0.0, 0.0, 0.0])
+    y = arm.simulate(t, u, rtol=1e-11, atol=1e-13)
+    assert np.max(np.abs(y - states[:, 2])) < 1e-8 * np.max(np.abs(states[:, 2]))
+    assert np.ptp(y) > 1.0  # it swings through large angles
+
+
+def _central(simulate, point, i, step):
+    up, down = np.array(point, dtype=float), np.array(point, dtype=float)
+    up[i] += step
+    down[i] -= step
+    return (simulate(up) - simulate(down)) / (2 * step)
+
+
+def _agree_with_finite_differences(module, t, u, k, x0, tight, tolerance=1e-6):
+    run = module.sensitivities(t, u, k, x0=x0, **tight)
+    for i in range(k.size):
+        fd = _central(lambda k_: module.simulate(t, u, k_, x0=x0, **tight), k, i, 1e-4 * k[i])
+        assert np.max(np.abs(run.dy_dk[:, i] - fd)) < tolerance * np.max(np.abs(fd)), i
+    for i in range(x0.size):
+        fd = _central(lambda x_: module.simulate(t, u, k, x0=x_, **tight), x0, i, 1e-4)
+        scale = max(np.max(np.abs(fd)), 1e-3 * np.max(np.abs(run.y)))
+        assert np.max(np.abs(run.dy_dx0[:, i] - fd)) < tolerance * scale, i
+    return run
+
+
+@pytest.mark.parametrize("hold", ["zoh", "linear"])
+def test_sensitivities_agree_with_finite_differences(tanks, arm, hold):
+    tight = dict(hold=hold, rtol=1e-13, atol=1e-15)
+    t, u = _record(n=401, span=100.0, period=40)
+    _agree_with_finite_differences(tanks, t, u, np.array(TWO_TANKS_K), np.array([1.0, 1.0]), tight)
+    t = np.linspace(0.0, 5.0, 251)
+    u = arm.input_signal("square", t, amplitude=3.0, period=2.0)
+    x0 = np.array([0.0, 0.01, 0.2])
+    _agree_with_finite_differences(arm, t, u, np.array(PENDULUM_K), x0, tight)
+
+
+def test_sensitivities_jump_where_a_discontinuous_relation_switches():
+    """sign friction, the arm swinging without sticking: crossings of w = 0, each with
+    the jump of the sensitivities that the crossing time's shift makes."""
+    module = nonlinear_codegen.load(pendulum("sign"), true_values=dict(J=0.05, fc=0.1))
+    t = np.linspace(0.0, 3.0, 301)
+    u = 4.0 * np.cos(2 * np.pi * t)
+    k, x0 = np.array(PENDULUM_K), np.array([0.0, 0.01, 0.0])
+    tight = dict(hold="linear", rtol=1e-12, atol=1e-14)
+    run = _agree_with_finite_differences(module, t, u, k, x0, tight, tolerance=1e-5)
+    assert len(run.events) >= 4 and {event[1] for event in run.events} == {0}
+
+
+def test_stiction_is_reported_not_smoothed():
+    module = nonlinear_codegen.load(pendulum("sign"), true_values=dict(J=0.05, fc=0.1))
+    t = np.linspace(0.0, 2.0, 201)
+    with pytest.raises(module.SimulationError, match="sliding mode"):
+        module.simulate(t, 0.05 * np.ones(t.size), x0=[0.0, 0.0, 0.0])
+
+
+def test_a_tank_run_dry_is_a_simulation_error(tanks):
+    t = np.linspace(0.0, 100.0, 101)
+    with pytest.raises(tanks.SimulationError, match=r"between t = \d"):
+        tanks.simulate(t, np.zeros(t.size), x0=[0.5, 0.5])
+
+
+def test_rows_of_parameters_are_simulated_as_one_at_a_time(tanks):
+    t, u = _record(n=201, span=50.0, period=20)
+    k = np.array([TWO_TANKS_K, (0.6, 0.35, 1.1), (0.45, 0.5, 0.9)])
+    x0 = np.array([[1.0, 1.0], [2.0, 0.5], [3.5, 1.0]])
+    together = tanks.simulate(t, u, k, x0=x0, hold="zoh")
+    assert together.shape == (3, t.size)
+    for row in range(3):
+        alone = tanks.simulate(t, u, k[row], x0=x0[row], hold="zoh")
+        np.testing.assert_allclose(together[row], alone, rtol=1e-8)
+    run = tanks.sensitivities(t, u, k, x0=x0[0], hold="zoh")
+    assert run.dy_dk.shape == (3, t.size, 3) and run.dx_dx0.shape == (3, t.size, 2, 2)
+
+
+def test_kernels_equal_sympys_evaluation_of_the_equations(tanks, arm):
+    rng = np.random.default_rng(1)
+    for module, system, k in ((tanks, two_tanks(), TWO_TANKS_K), (arm, pendulum(), PENDULUM_K)):
+        x_, u_, k_ = list(system.states), system.input, list(system.unknowns)
+        f = sympy.lambdify([x_, u_, k_], list(system.f), "math")
+        g = sympy.lambdify([x_, u_, k_], list(system.g), "math")
+        jac = sympy.lambdify(
+            [x_, u_, k_], [system.f.jacobian(x_).tolist(), system.f.jacobian(k_).tolist()], "math"
+        )
+        for _ in range(5):
+            x = rng.uniform(0.5, 4.0, len(x_))
+            u = rng.uniform(0, 2)
+            np.testing.assert_allclose(module.rhs(x, u, k), np.ravel(f(x, u, k)), rtol=1e-14)
+            np.testing.assert_allclose(module.output(x, u, k), np.ravel(g(x, u, k)), rtol=1e-14)
+            d = module.jacobians(x, u, k)
+            f_x, f_k = jac(x, u, k)
+            np.testing.assert_allclose(d.f_x, np.array(f_x, dtype=float), rtol=1e-13, atol=1e-15)
+            np.testing.assert_allclose(d.f_k, np.array(f_k, dtype=float), rtol=1e-13, atol=1e-15)
+        points = rng.uniform(0.5, 4.0, (7, len(x_)))  # vectorised over a leading axis
+        batch = module.rhs(points, 1.0, k)
+        assert batch.shape == (7, len(x_))
+        np.testing.assert_allclose(batch[3], module.rhs(points[3], 1.0, k), rtol=1e-15)
+
+
+def test_second_derivative_kernel_is_the_derivative_of_the_jacobian(tanks):
+    """`second` (for the batch integrator's sensitivities): d(f_x) and d(f_k) along a
+    direction in (x, u), against central differences of the Jacobians."""
+    x, u, k, v, du = np.array([2.0, 1.5]), 0.7, TWO_TANKS_K, np.array([0.3, -0.2]), 0.5
+    arguments = (*x, u, *k)
+    modes = tanks._FLOAT.modes(*arguments)
+    d = np.array(tanks._FLOAT.second(*arguments, *modes, *v, du))
+    h = 1e-6
+    up = tanks.jacobians(x + h * v, u + h * du, k)
+    down = tanks.jacobians(x - h * v, u - h * du, k)
+    expected = np.concatenate(
+        [((up.f_x - down.f_x) / (2 * h)).ravel(), ((up.f_k - down.f_k) / (2 * h)).ravel()]
+    )
+    np.testing.assert_allclose(d, expected, rtol=1e-7, atol=1e-9)
+
+
+def test_generation_is_deterministic_and_splices_no_model_text():
+    system = two_tanks()
+    tricky = 'a """ docstring end\n and "quotes"'
+    first = nonlinear_codegen.render(system, true_values=TANKS_VALUES, description=tricky)
+    again = nonlinear_codegen.render(two_tanks(), true_values=TANKS_VALUES, description=tricky)
+    assert first == again
+    assert tricky not in first and repr(tricky) in first
+    compile(first, "two_tanks.py", "exec")
+
+
+def _renamed(system: NonlinearStateSpace, **changes) -> NonlinearStateSpace:
+    fields = {name: getattr(system, name) for name in system.__dataclass_fields__}
+    return NonlinearStateSpace(**(fields | changes))
+
+
+@pytest.mark.parametrize(
+    ("changes", "kind"),
+    [
+        ({"name": "two tanks"}, "bad_name"),
+        ({"name": "json"}, "reserved_name"),
+        ({"f": sympy.Matrix([sympy.Symbol("rtol"), 0])}, "reserved_name"),
+        ({"g": sympy.Matrix([sympy.gamma(sympy.Symbol("q1"))])}, "unsupported_relation"),
+    ],
+)
+def test_what_the_module_cannot_carry_is_a_model_error(changes, kind):
+    with pytest.raises(ModelError) as caught:
+        nonlinear_codegen.render(_renamed(two_tanks(), **changes))
+    assert caught.value.diagnostics[0].kind == kind
+
+
+def test_arguments_are_checked(tanks):
+    t, u = _record(n=11, span=10.0, period=5)
+    with pytest.raises(ValueError, match="hold must be one of"):
+        tanks.simulate(t, u, hold="cubic")
+    with pytest.raises(ValueError, match="k must give the 3 unknowns"):
+        tanks.simulate(t, u, [0.5, 0.4])
+    with pytest.raises(ValueError, match="x0 must end in an axis of the 2 values q1, q2"):
+        tanks.simulate(t, u, x0=[1.0, 2.0, 3.0])
+    with pytest.raises(ValueError, match="the same number of rows"):
+        tanks.simulate(t, u, np.ones((3, 3)), x0=np.ones((2, 2)))
+    with pytest.raises(ValueError, match="unexpected parameter"):
+        tanks.simulate(t, u, area=2.0)
