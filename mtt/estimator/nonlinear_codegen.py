@@ -17,7 +17,7 @@ from typing import TYPE_CHECKING
 
 import sympy
 
-from mtt import __version__
+from mtt.version import __version__
 from mtt.estimator.codegen import environment, is_name, load_source, shadows
 from mtt.estimator.kernels import Frozen, Kernel, KernelError, freeze, kernel
 from mtt.language.diagnostics import ModelError, Source, error
