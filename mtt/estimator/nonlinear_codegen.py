@@ -17,10 +17,10 @@ from typing import TYPE_CHECKING
 
 import sympy
 
-from mtt.version import __version__
 from mtt.estimator.codegen import environment, is_name, load_source, shadows
 from mtt.estimator.kernels import Frozen, Kernel, KernelError, freeze, kernel
 from mtt.language.diagnostics import ModelError, Source, error
+from mtt.version import __version__
 
 if TYPE_CHECKING:
     from mtt.derivation.nonlinear import NonlinearStateSpace
