@@ -12,9 +12,7 @@ import sympy
 import mtt
 from mtt.cli import views
 from mtt.cli.main import main
-from mtt.derivation.causality import assign
-from mtt.derivation.pipeline import load
-from mtt.present import bode, drawing
+from mtt.present import bode
 
 CONFLICT = "model two\ninput Se:a\nparam r = 1\nSe:a -> 0:n\nSe:b -> 0:n\n0:n -> R:r\n0:n -> De:v\n"
 
@@ -23,48 +21,6 @@ def run(capsys, *argv: str) -> tuple[int, str, str]:
     status = main(list(argv))
     out, err = capsys.readouterr()
     return status, out, err
-
-
-def test_a_bond_runs_between_labels_with_its_barb_at_the_head_and_stroke_where_effort_goes():
-    a, b, half = np.array([0.0, 0.0]), np.array([2.0, 0.0]), np.array([0.3, 0.1])
-    picture = drawing.bond_picture(7, a, b, half, half, stroke_at_head=False)
-    start, end = picture.line
-    np.testing.assert_allclose([start, end], [[0.3, 0.0], [1.7, 0.0]])  # at the label boxes
-    barb_from, barb_to = picture.barb
-    np.testing.assert_allclose(barb_from, end)
-    assert barb_to[0] < end[0] and barb_to[1] > 0  # back along the bond, on its left
-    stroke = np.array(picture.stroke)
-    np.testing.assert_allclose(stroke.mean(axis=0), start)  # across the tail's end
-    assert stroke[0, 0] == stroke[1, 0]  # perpendicular to the bond
-    assert drawing.bond_picture(7, a, b, half, half, stroke_at_head=None).stroke is None
-
-
-def test_the_layout_is_deterministic_and_keeps_labels_apart():
-    graph = load(mtt.example("absorber"))
-    first, second = drawing.layout(graph), drawing.layout(graph)
-    assert all(np.array_equal(first[name], second[name]) for name in first)
-    points = np.array(list(first.values()))
-    distances = np.linalg.norm(points[:, None] - points[None], axis=-1)
-    np.fill_diagonal(distances, np.inf)
-    assert distances.min() > 0.5 * drawing.BOND_LENGTH
-    extent = np.ptp(points, axis=0)
-    assert extent[0] >= extent[1]  # laid out wide
-
-
-def test_a_large_model_is_laid_out_fast_and_unknotted():
-    stages = 40  # 162 components: past Kamada-Kawai's limit
-    lines = ["model ladder", "param r = 1", "param c = 1", "unknown k = 2", "Se:v -> 1:s1"]
-    for i in range(1, stages + 1):
-        lines += [f"1:s{i} -> R:r{i}(r)", f"1:s{i} -> 0:n{i}", f"0:n{i} -> C:c{i}(c)"]
-        lines.append(f"0:n{i} -> 1:s{i + 1}" if i < stages else f"0:n{i} -> De:out")
-    graph = mtt.load("\n".join(lines) + "\n").bondgraph
-    assert graph.graph.number_of_nodes() > drawing.KAMADA_KAWAI_NODES
-    position, again = drawing.layout(graph), drawing.layout(graph)
-    assert all(np.array_equal(position[name], again[name]) for name in position)
-    points = np.array(list(position.values()))
-    distances = np.linalg.norm(points[:, None] - points[None], axis=-1)
-    np.fill_diagonal(distances, np.inf)
-    assert distances.min() > 0.3 * drawing.BOND_LENGTH
 
 
 def test_mtt_draw_writes_every_label_and_bond_number(tmp_path, capsys):
@@ -167,40 +123,6 @@ def test_mtt_bode_of_a_zero_transfer_function_is_an_error_without_warnings(tmp_p
     assert status == 2 and json.loads(out)["errors"][0]["kind"] == "bad_value"
     assert err == "error[bad_value]: G(s) is zero at c = 0: there is no Bode diagram\n"
     assert views._finite(np.array([[1.5, -np.inf, np.nan]])) == [[1.5, None, None]]
-
-
-def test_the_figure_has_a_line_a_barb_and_a_stroke_per_bond():
-    graph = load(mtt.example("dc_drive"))
-    (with_strokes,) = drawing.figure(graph, assign(graph)).axes
-    (without,) = drawing.figure(graph).axes
-    assert (len(with_strokes.lines), len(without.lines)) == (3 * 11, 2 * 11)
-
-
-def test_signals_of_modulated_sources_are_drawn_as_dashed_arrows():
-    graph = load(mtt.example("absorber"))  # MSf streams read the stage concentrations
-    assert drawing.signals(graph) == [
-        ("liquid1", "x1"), ("liquid2", "x2"), ("product", "x3"),
-        ("gas3", "x3"), ("gas2", "x2"), ("off_gas", "x1"),
-    ]  # fmt: skip
-    (ax,) = drawing.figure(graph).axes
-    arrows = [child for child in ax.texts if getattr(child, "arrow_patch", None) is not None]
-    assert len(arrows) == 6
-
-
-def test_subsystems_are_boxes_around_their_components_named_as_in_their_file():
-    graph = load(mtt.example("absorber_stages"))  # three stages from one stage file
-    position = drawing.layout(graph)
-    half = {name: np.array([0.2, 0.1]) for name in position}
-    boxes = drawing.subsystem_boxes(graph, position, half)
-    assert list(boxes) == ["s1", "s2", "s3"]
-    for name, (lower, upper) in boxes.items():
-        members = [n for n in position if n.startswith(name + ".")]
-        assert len(members) == 6  # 0:x, C:h, 1:down, 1:up, MSf:liquid, MSf:gas
-        assert all((lower < position[n]).all() and (position[n] < upper).all() for n in members)
-    assert drawing._local_label(graph, "s2.x") == "0:x"
-    assert drawing._local_label(graph, "feed") == "Sf:feed"
-    svg = drawing.render(drawing.figure(graph), "svg").decode()
-    assert ">s1</text>" in svg and ">MSf:liquid</text>" in svg
 
 
 def _png_size(path) -> tuple[int, int]:

@@ -1,180 +1,231 @@
 """A bond graph as a picture: component labels, bonds with half-arrows, causal strokes.
 
-The layout is networkx's (Kamada-Kawai: bonds of even length, few crossings; for large
-models, where Kamada-Kawai takes seconds, a spring layout started from the layers of
-distance to the input); matplotlib draws it.
-Each bond runs between the boxes of its two labels, with the half-arrow at the head (the
-direction of positive power) and, once causality is assigned, the causal stroke across
-the end that receives the effort. The signals a modulated source reads (e(X), f(X): no
-power, no bond) are dashed full arrows from the component read to the source.
+`picture` places everything as plain data, in inches: the components where the layered
+layout puts them (`layout`: left to right along the flow of power), each bond between the
+boxes of its two labels with the half-arrow at its head (the direction of positive power)
+and, once causality is assigned, the causal stroke across the end that receives the
+effort; the bond numbers upright, beside their bond; the signals a modulated source reads
+(e(X), f(X): no power, no bond) as dashed arrows from the component read. `problems` says
+what in a picture overlaps or crosses where it must not, and `picture` keeps the first of
+a few layouts that has nothing to say; `figure` draws the picture with matplotlib. A
+part's ports (SS, in a subsystem's file drawn alone) are open ends, named in italics.
 """
 
 from __future__ import annotations
 
 import io
-import math
-from dataclasses import dataclass
+from dataclasses import replace
+from functools import cache
 from pathlib import Path
+from types import MappingProxyType
 
 import matplotlib
-import networkx as nx
 import numpy as np
-from matplotlib.backends.backend_agg import FigureCanvasAgg
+from matplotlib.backends.backend_agg import FigureCanvasAgg, RendererAgg
+from matplotlib.collections import LineCollection
 from matplotlib.figure import Figure
-from matplotlib.patches import FancyBboxPatch
+from matplotlib.font_manager import FontProperties
+from matplotlib.patches import Circle, FancyArrowPatch, FancyBboxPatch
+from matplotlib.path import Path as MplPath
 
 from mtt.derivation.causality import CausalBondGraph
 from mtt.estimator.codegen import write_atomic
 from mtt.language.bondgraph import BondGraph
 from mtt.language.components import Role
+from mtt.present.geometry import Box, Obstacles, pieces
+from mtt.present.layout import (
+    BOX_PAD,
+    BOX_TITLE,
+    Variant,
+    exit_distance,
+    layout,
+    owner,
+    owners,
+)
+from mtt.present.picture import END, TICK, BondPicture, Label, Picture, problems
 
-BOND_LENGTH = 1.0  # layout units between bonded labels
-TICK = 0.09  # half-arrow barb and causal stroke, in layout units
-GAP = 0.07  # between a label and the bonds that end at it
-KAMADA_KAWAI_NODES = 150  # above, Kamada-Kawai takes seconds (20 s at 400 components)
-MAX_INCHES = 60.0  # a side of the picture
-CROSSING = 2.0  # the layout length of a bond into or out of a subsystem (others: 1)
-BOX_PAD, BOX_FILL = 0.06, "#f3f3f3"  # a subsystem's box around its labels
-INK, NUMBER_INK, SIGNAL_INK = "#1a1a1a", "#7a7a7a", "#b04a1a"
-ROLE_INK = {Role.SOURCE: "#1f5fa8", Role.DETECTOR: "#1f5fa8", Role.JUNCTION: "#1a1a1a"}
+__all__ = ["Picture", "figure", "picture", "problems", "render", "save", "signals"]
 
-
-def layout(graph: BondGraph) -> dict[str, np.ndarray]:
-    """Positions of the components: laid out on the bonds, turned to lie wide."""
-    simple = nx.Graph(graph.graph.to_undirected())
-    if simple.number_of_nodes() == 1:
-        return {next(iter(simple)): np.zeros(2)}
-    for a, b, data in simple.edges(data=True):  # a bond across a subsystem's box is longer
-        data["length"] = 1.0 if _owner(graph, a) == _owner(graph, b) else CROSSING
-    if simple.number_of_nodes() <= KAMADA_KAWAI_NODES:
-        position = nx.kamada_kawai_layout(simple, weight="length")
-    else:  # the layers of distance from the input, relaxed: long chains meander, unknotted
-        start = nx.bfs_layout(simple, start=graph.input) if nx.is_connected(simple) else None
-        position = nx.spring_layout(simple, pos=start, seed=0, iterations=50)
-    points = np.array(list(position.values()))
-    points -= points.mean(axis=0)
-    # principal axes: the longest extent of the drawing runs left to right
-    _, _, axes = np.linalg.svd(points, full_matrices=False)
-    points = points @ axes.T
-    lengths = [np.linalg.norm(points[i] - points[j]) for i, j in _index_pairs(simple, position)]
-    points *= BOND_LENGTH / (np.median(lengths) if lengths else 1.0)
-    return dict(zip(position, points, strict=True))
+FONT, NUMBER_FONT, BOX_FONT, TITLE_FONT = 10.0, 7.0, 8.0, 9.0  # points
+PAD = 0.15  # the white box behind a label, in font sizes
+GAP = 0.05  # between a label's box and the bonds that end at it
+PARALLEL = 0.12  # between bonds that join the same two components
+MARGIN = 0.15  # around the picture
+MAX_INCHES = 60.0  # a side of the figure: larger pictures are drawn smaller, fonts and all
+VARIANTS = (Variant(), Variant(flip=True), Variant(spacing=1.7), Variant(spacing=1.7, flip=True))
+BENDS = (0.0, 0.3, -0.3, 0.6, -0.6, 1.0, -1.0)  # a signal's curvature, tried in turn
+INK, NUMBER_INK, SIGNAL_INK, BOX_FILL = "#1a1a1a", "#7a7a7a", "#b04a1a", "#f3f3f3"
+ROLE_INK = {Role.SOURCE: "#1f5fa8", Role.DETECTOR: "#1f5fa8", Role.PORT: NUMBER_INK}
 
 
-def _owner(graph: BondGraph, name: str) -> str:
-    """The innermost subsystem a component belongs to ("" for the model itself)."""
-    owners = [s.name for s in graph.subsystems if name.startswith(s.name + ".")]
-    return max(owners, key=len, default="")
+@cache
+def _measure(text: str, size: float, italic: bool) -> np.ndarray:
+    """Half-sizes (inches) of a text's box as matplotlib draws it (line height at least
+    that of "lp", as matplotlib lays out a line), with `PAD` around."""
+    renderer, font = _renderer(), FontProperties(size=size, style="italic" if italic else None)
+    width, height, _ = renderer.get_text_width_height_descent(text, font, ismath=False)
+    _, line, _ = renderer.get_text_width_height_descent("lp", font, ismath=False)
+    return (np.array([width, max(height, line)]) / 72 + 2 * PAD * size / 72) / 2
 
 
-def _index_pairs(simple: nx.Graph, position: dict) -> list[tuple[int, int]]:
-    index = {name: i for i, name in enumerate(position)}
-    return [(index[a], index[b]) for a, b in simple.edges()]
+@cache
+def _renderer() -> RendererAgg:
+    return RendererAgg(1, 1, 72)  # 72 dpi: a pixel is a point
 
 
-def _exit(half: np.ndarray, direction: np.ndarray) -> float:
-    """How far from its centre along the unit `direction` a ray leaves a box of half-sizes
-    `half` (a label's box, so that bonds start at the label's edge)."""
-    scale = [h / abs(d) for h, d in zip(half, direction, strict=True) if abs(d) > 1e-12]
-    return min(scale) if scale else 0.0
-
-
-Segment = tuple[np.ndarray, np.ndarray]
-
-
-@dataclass(frozen=True)
-class BondPicture:
-    """Where one bond's marks go, in layout units."""
-
-    number: int
-    line: Segment  # from the edge of the tail's label to the edge of the head's
-    barb: Segment  # the half-arrow at the head, on the left of the direction of power
-    stroke: Segment | None  # across the end that receives the effort (after causality)
+def _label_text(graph: BondGraph, name: str) -> str:
+    """TYPE:NAME, the name as its subsystem's file writes it (the box gives the rest); a
+    port by its name alone."""
+    component = graph.component(name)
+    inner = owner(graph, name)
+    local = name[len(inner) + 1 :] if inner else name
+    return local if component.type.role is Role.PORT else f"{component.type.name}:{local}"
 
 
 def bond_picture(
-    number: int, a: np.ndarray, b: np.ndarray, half_a: np.ndarray, half_b: np.ndarray,
-    stroke_at_head: bool | None,
+    number: int, path: np.ndarray, half_a: np.ndarray, half_b: np.ndarray,
+    stroke_at_head: bool | None, shift: float = 0.0,
 ) -> BondPicture:  # fmt: skip
-    """The marks of a bond from a label at `a` to one at `b` (boxes of half-sizes half_*)."""
-    along = (b - a) / np.linalg.norm(b - a)
-    normal = np.array([-along[1], along[0]])
-    start = a + along * _exit(half_a, along)
-    end = b - along * _exit(half_b, -along)
-    barb = (end, end - along * TICK * 1.4 + normal * TICK)
+    """The marks of a bond from a label centred at path[0] to one at path[-1] (boxes of
+    half-sizes half_*, bends between), moved `shift` to its right (beside another bond
+    between the same two labels). Its ends keep a causal stroke's length off the boxes."""
+    path = np.array(path, dtype=float)
+    out, back = _unit(path[1] - path[0]), _unit(path[-1] - path[-2])
+    normal_out, normal = np.array([-out[1], out[0]]), np.array([-back[1], back[0]])
+    path[0] = path[0] + out * _clearance(half_a, out) - normal_out * shift
+    path[-1] = path[-1] - back * _clearance(half_b, -back) - normal * shift
+    path[1:-1] -= normal * shift
+    start, end = path[0], path[-1]
+    barb = (end, end - back * TICK * 1.4 + normal * TICK)
     stroke = None
     if stroke_at_head is not None:
-        at = end if stroke_at_head else start
-        stroke = (at - normal * TICK, at + normal * TICK)
-    return BondPicture(number, (start, end), barb, stroke)
+        at, across = (end, normal) if stroke_at_head else (start, normal_out)
+        stroke = (at - across * TICK, at + across * TICK)
+    return BondPicture(number, path, barb, stroke)
 
 
-def figure(graph: BondGraph, causal: CausalBondGraph | None = None) -> Figure:
-    """The picture of `graph`, with causal strokes when `causal` is given."""
-    position = layout(graph)
-    points = np.array(list(position.values()))
-    low, high = points.min(axis=0) - 0.6, points.max(axis=0) + 0.6
-    width, height = high - low
-    inches = min(1.35, MAX_INCHES / max(width, height))  # room for "GY:km" at 10 pt
-    fig = Figure(figsize=(max(3.0, width * inches), max(2.0, height * inches)))
-    canvas = FigureCanvasAgg(fig)
-    ax = fig.add_axes((0, 0, 1, 1))
-    ax.set_xlim(low[0], high[0])
-    ax.set_ylim(low[1], high[1])
-    ax.set_aspect("equal")
-    ax.axis("off")
-    labels = {}
-    for component in graph.components:
-        ink = ROLE_INK.get(component.type.role, INK)
-        x, y = position[component.name]
-        label = _local_label(graph, component.name)
-        labels[component.name] = ax.text(
-            x, y, label, ha="center", va="center", fontsize=10, color=ink,
-            bbox={"boxstyle": "square,pad=0.15", "facecolor": "white", "edgecolor": "none"},
-            zorder=3,
-        )  # fmt: skip
-    canvas.draw()  # the labels' sizes are known after a draw
-    to_data = ax.transData.inverted()
-    half = {}
-    for name, text in labels.items():
-        box = text.get_window_extent().transformed(to_data)
-        half[name] = np.array([box.width, box.height]) / 2 + GAP
-    for name, (lower, upper) in subsystem_boxes(graph, position, half).items():
-        ax.add_patch(
-            FancyBboxPatch(
-                lower,
-                *(upper - lower),
-                boxstyle="round,pad=0,rounding_size=0.08",
-                facecolor=BOX_FILL,
-                edgecolor=NUMBER_INK,
-                linestyle=(0, (5, 3)),
-                lw=0.9,
-                zorder=0,
-            )
-        )
-        ax.text(lower[0] + 0.06, upper[1] - 0.05, name, ha="left", va="top", fontsize=8,
-                color=NUMBER_INK, zorder=1)  # fmt: skip
-    title = graph.name + (f": {graph.description}" if graph.description else "")
-    ax.text(low[0] + 0.05, high[1] - 0.05, title, ha="left", va="top", fontsize=9,
-            color=NUMBER_INK)  # fmt: skip
+def _unit(vector: np.ndarray) -> np.ndarray:
+    return vector / np.linalg.norm(vector)
+
+
+def _clearance(half: np.ndarray, direction: np.ndarray) -> float:
+    """How far from a label's centre a bond leaving along `direction` starts: a gap off
+    its box, and as far again as a stroke across the bond reaches along each axis."""
+    across = np.abs([direction[1], direction[0]])
+    return exit_distance(half + GAP + TICK * across, direction)
+
+
+def picture(graph: BondGraph, causal: CausalBondGraph | None = None) -> Picture:
+    """The picture of `graph` (with causal strokes when `causal` is given): the first of
+    the layouts in `VARIANTS` with no problems, else the one with the fewest."""
+    best = None
+    for variant in VARIANTS:
+        candidate = _place(graph, causal, variant)
+        found = len(problems(candidate))
+        if best is None or found < best[0]:
+            best = (found, candidate)
+        if not found:
+            break
+    return best[1]
+
+
+def _place(graph: BondGraph, causal: CausalBondGraph | None, variant: Variant) -> Picture:
+    ports = {c.name for c in graph.components if c.type.role is Role.PORT}
+    texts = {c.name: _label_text(graph, c.name) for c in graph.components}
+    size = {n: _measure(texts[n], FONT, n in ports) for n in texts}
+    placed = layout(graph, {n: h + GAP + TICK for n, h in size.items()}, variant)
+    position = placed.position
+    labels = {
+        c.name: Label(texts[c.name], position[c.name], size[c.name],
+                      ROLE_INK.get(c.type.role, INK), c.name in ports)
+        for c in graph.components
+    }  # fmt: skip
+    bonds = _bonds(graph, causal, labels, placed.bends)
+    obstacles = Obstacles([label.box for label in labels.values()], reach=END)
+    for bond in bonds:
+        obstacles.add_bond(bond.path, [bond.barb] + ([bond.stroke] if bond.stroke else []))
+    bonds = [replace(b, label=_number_box(b, obstacles)) for b in bonds]
+    arrows = tuple(_signal(graph, reader, read, labels, bonds, obstacles)
+                   for reader, read in signals(graph))  # fmt: skip
+    boxes = subsystem_boxes(graph, position, {n: h + GAP for n, h in size.items()})
+    box_names = {
+        name: Label(name.rpartition(".")[2], lower + (upper - lower) * [0, 1] + half * [1, -1]
+                    + [0.03, -0.01], half, NUMBER_INK)
+        for name, (lower, upper) in boxes.items()
+        for half in [_measure(name.rpartition(".")[2], BOX_FONT, False)]
+    }  # fmt: skip
+    corners = [(label.centre - label.half, label.centre + label.half) for label in labels.values()]
+    corners += [(b.label[0] - b.label[1], b.label[0] + b.label[1]) for b in bonds]
+    corners += [(b.path.min(axis=0), b.path.max(axis=0)) for b in bonds]
+    corners += list(boxes.values()) + [(p.min(axis=0), p.max(axis=0)) for p in arrows]
+    lower = np.min([c[0] for c in corners], axis=0) - MARGIN
+    upper = np.max([c[1] for c in corners], axis=0) + MARGIN
+    words = graph.name + (f": {graph.description}" if graph.description else "")
+    half = _measure(words, TITLE_FONT, False)
+    title = Label(words, np.array([lower[0] + half[0], upper[1] + half[1]]), half, NUMBER_INK)
+    return Picture(title, MappingProxyType(labels), tuple(bonds), arrows,
+                   MappingProxyType(boxes), MappingProxyType(box_names), lower,
+                   upper + [0, 2 * half[1]])  # fmt: skip
+
+
+def _bonds(graph: BondGraph, causal, labels: dict[str, Label], bends: dict) -> list[BondPicture]:
+    """Each bond's line, barb and stroke; bonds between the same two labels side by side."""
+    pairs: dict[frozenset, list[int]] = {}
     for bond in graph.bonds:
+        pairs.setdefault(frozenset((bond.tail, bond.head)), []).append(bond.number)
+    pictures = []
+    for bond in graph.bonds:
+        together = pairs[frozenset((bond.tail, bond.head))]
+        shift = (together.index(bond.number) - (len(together) - 1) / 2) * PARALLEL
+        tail, head = labels[bond.tail], labels[bond.head]
+        via = bends.get((bond.tail, bond.head), np.empty((0, 2)))
+        path = np.vstack([tail.centre, via, head.centre])
         at_head = None if causal is None else causal.stroke_at(bond.number) == bond.head
-        _draw(ax, bond_picture(bond.number, position[bond.tail], position[bond.head],
-                               half[bond.tail], half[bond.head], at_head))  # fmt: skip
-    for reader, read in signals(graph):
-        start, end = bond_picture(0, position[read], position[reader], half[read],
-                                  half[reader], None).line  # fmt: skip
-        ax.annotate("", xy=end, xytext=start, arrowprops={
-            "arrowstyle": "-|>", "linestyle": (0, (4, 3)), "color": SIGNAL_INK,
-            "shrinkA": 0, "shrinkB": 0, "lw": 1.0, "connectionstyle": "arc3,rad=0.25"})  # fmt: skip
-    return fig
+        pictures.append(bond_picture(bond.number, path, tail.half, head.half, at_head, shift))
+    return pictures
 
 
-def _local_label(graph: BondGraph, name: str) -> str:
-    """TYPE:NAME, the name as its subsystem's file writes it (the box gives the rest)."""
-    component = graph.component(name)
-    owner = _owner(graph, name)
-    return f"{component.type.name}:{name[len(owner) + 1 :] if owner else name}"
+def _number_box(bond: BondPicture, obstacles: Obstacles) -> Box:
+    """The bond number's box: beside the middle of the bond's longest piece, on the side
+    away from the barb, or failing room there, further along or on the other side."""
+    half = _measure(str(bond.number), NUMBER_FONT, False)
+    start, end = max(pieces(bond.path), key=lambda piece: np.linalg.norm(piece[1] - piece[0]))
+    along = _unit(end - start)
+    right = np.array([along[1], -along[0]])
+    candidates = [
+        (start + (end - start) * t + side * (exit_distance(half, side) + 0.02), half)
+        for t in (0.5, 0.35, 0.65, 0.2, 0.8)
+        for side in (right, -right)
+    ]
+    box = next((c for c in candidates if obstacles.box_clear(c)), candidates[0])
+    obstacles.add_boxes([box])
+    return box
+
+
+def _signal(graph, reader: str, read: str, labels, bonds, obstacles: Obstacles) -> np.ndarray:
+    """The arrow of a signal: the first curve from the component read to the source that
+    touches no label, number or bond end; a port's signal starts at its bond's middle."""
+    if read in labels:
+        a, half_a = labels[read].centre, labels[read].half + GAP
+    else:  # an SS port joined into a bond: the bond carries what the signal reads
+        number = graph.port_bonds[read]
+        path = next(b.path for b in bonds if b.number == number)
+        a, half_a = path[len(path) // 2 - 1 : len(path) // 2 + 1].mean(axis=0), np.zeros(2)
+    b, half_b = labels[reader].centre, labels[reader].half + GAP
+    chord = b - a
+    normal = np.array([-chord[1], chord[0]])
+    candidates = []
+    for bend in BENDS:
+        control = (a + b) / 2 + bend * normal / 2
+        out, back = control - a, control - b
+        start = a + out / np.linalg.norm(out) * (exit_distance(half_a, out / np.linalg.norm(out))
+                                                 if np.any(half_a) else 0.0)  # fmt: skip
+        end = b + back / np.linalg.norm(back) * exit_distance(half_b, back / np.linalg.norm(back))
+        t = np.linspace(0, 1, 17)[:, None]
+        candidates.append((1 - t) ** 2 * start + 2 * t * (1 - t) * control + t**2 * end)
+    path = next((c for c in candidates if obstacles.path_clear(c)), candidates[0])
+    obstacles.add_path(path)
+    return path
 
 
 def subsystem_boxes(graph: BondGraph, position: dict, half: dict) -> dict[str, tuple]:
@@ -185,7 +236,7 @@ def subsystem_boxes(graph: BondGraph, position: dict, half: dict) -> dict[str, t
         corners = [
             (position[name] - half[name], position[name] + half[name])
             for name in position
-            if _owner(graph, name) == subsystem.name
+            if owner(graph, name) == subsystem.name
         ]
         corners += [
             box for inner, box in boxes.items() if inner.rpartition(".")[0] == subsystem.name
@@ -193,7 +244,7 @@ def subsystem_boxes(graph: BondGraph, position: dict, half: dict) -> dict[str, t
         if not corners:
             continue
         lower = np.min([c[0] for c in corners], axis=0) - BOX_PAD
-        upper = np.max([c[1] for c in corners], axis=0) + BOX_PAD + np.array([0.0, 0.16])
+        upper = np.max([c[1] for c in corners], axis=0) + BOX_PAD + np.array([0.0, BOX_TITLE])
         boxes[subsystem.name] = (lower, upper)
     return dict(sorted(boxes.items()))
 
@@ -208,18 +259,63 @@ def signals(graph: BondGraph) -> list[tuple[str, str]]:
     return pairs
 
 
-def _draw(ax, bond: BondPicture) -> None:
-    (start, end) = bond.line
-    ax.plot(*zip(*bond.line, strict=True), color=INK, lw=1.2, solid_capstyle="butt")
-    ax.plot(*zip(*bond.barb, strict=True), color=INK, lw=1.2, solid_capstyle="round")
-    if bond.stroke is not None:
-        ax.plot(*zip(*bond.stroke, strict=True), color=INK, lw=1.6)
-    along = (end - start) / np.linalg.norm(end - start)
-    middle = (start + end) / 2 + np.array([along[1], -along[0]]) * 0.1  # away from the barb
-    angle = math.degrees(math.atan2(along[1], along[0]))
-    upright = angle - 180 * (abs(angle) > 90)
-    ax.text(*middle, str(bond.number), fontsize=7, color=NUMBER_INK, ha="center", va="center",
-            rotation=upright, rotation_mode="anchor")  # fmt: skip
+def members(graph: BondGraph, subsystem: str) -> list[str]:
+    """The components inside a subsystem's box (its own and its subsystems')."""
+    return [c.name for c in graph.components if subsystem in owners(graph, c.name)]
+
+
+def figure(graph: BondGraph, causal: CausalBondGraph | None = None) -> Figure:
+    """The picture of `graph` drawn, with causal strokes when `causal` is given."""
+    p = picture(graph, causal)
+    width, height = p.upper - p.lower
+    scale = min(1.0, MAX_INCHES / max(width, height))  # fonts and lines shrink with it
+    fig = Figure(figsize=(width * scale, height * scale))
+    FigureCanvasAgg(fig)
+    ax = fig.add_axes((0, 0, 1, 1))
+    ax.set_xlim(p.lower[0], p.upper[0])
+    ax.set_ylim(p.lower[1], p.upper[1])
+    ax.set_aspect("equal")
+    ax.axis("off")
+    for name, (lower, upper) in p.boxes.items():
+        ax.add_patch(FancyBboxPatch(lower, *(upper - lower), facecolor=BOX_FILL,
+                                    boxstyle="round,pad=0,rounding_size=0.08", edgecolor=NUMBER_INK,
+                                    linestyle=(0, (5, 3)), lw=0.9 * scale, zorder=0))  # fmt: skip
+        _text(ax, p.box_names[name], BOX_FONT * scale, zorder=1)
+    _text(ax, p.title, TITLE_FONT * scale)
+    for label in p.labels.values():
+        _text(ax, label, FONT * scale, zorder=3, boxed=True)
+    marks = {"line": [b.path for b in p.bonds], "barb": [b.barb for b in p.bonds],
+             "stroke": [b.stroke for b in p.bonds if b.stroke is not None]}  # fmt: skip
+    for kind, segments in marks.items():
+        width = {"line": 1.2, "barb": 1.2, "stroke": 1.6}[kind] * scale
+        capstyle = "round" if kind == "barb" else "butt"
+        ax.add_collection(LineCollection(segments, colors=INK, linewidths=width,
+                                         capstyle=capstyle, label=kind))  # fmt: skip
+    for bond in p.bonds:
+        _text(ax, Label(str(bond.number), *bond.label, NUMBER_INK), NUMBER_FONT * scale)
+    for bond in p.bonds:  # a port is an open end
+        for end, name in zip(bond.ends, _ends(graph, bond.number), strict=True):
+            if p.labels[name].port:
+                ax.add_patch(Circle(end, 0.035, facecolor="white", edgecolor=INK,
+                                    lw=1.0 * scale, zorder=4))  # fmt: skip
+    for path in p.signals:
+        ax.add_patch(FancyArrowPatch(path=MplPath(path), arrowstyle="-|>",
+                                     mutation_scale=9 * scale, color=SIGNAL_INK,
+                                     linestyle=(0, (4, 3)), lw=1.0 * scale, zorder=2))  # fmt: skip
+    return fig
+
+
+def _ends(graph: BondGraph, number: int) -> tuple[str, str]:
+    bond = graph.bond(number)
+    return bond.tail, bond.head
+
+
+def _text(ax, label: Label, size: float, zorder: float = 2, boxed: bool = False) -> None:
+    """A label's text, upright, centred in its box (a component's on white)."""
+    box = {"boxstyle": f"square,pad={PAD}", "facecolor": "white", "edgecolor": "none"}
+    ax.text(*label.centre, label.text, ha="center", va="center", fontsize=size,
+            color=label.ink, style="italic" if label.port else "normal",
+            bbox=box if boxed else None, zorder=zorder)  # fmt: skip
 
 
 # Same model, same bytes: no dates, no random identifiers in the files.
