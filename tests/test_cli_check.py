@@ -31,6 +31,7 @@ RECORD_KEYS = {
     "unknown",
     "input",
     "output",
+    "ports",
 }
 DIAGNOSTIC_KEYS = {"file", "kind", "line", "column", "message", "notes"}
 
@@ -130,6 +131,7 @@ def test_check_json_on_the_shipped_models(runs):
         "unknown": ["c"],
         "input": "Se:v",
         "output": "Df:i",
+        "ports": [],
     }
     drive = records["models/dc_drive.bg"]
     assert (drive["input"], drive["output"], drive["unknown"]) == ("Se:v", "Df:vm", ["k"])

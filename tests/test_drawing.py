@@ -3,6 +3,7 @@ shipped model (and the test suite's subsystems), with the rules a textbook drawi
 
 from __future__ import annotations
 
+import json
 from dataclasses import replace
 from functools import cache
 from itertools import pairwise
@@ -11,9 +12,10 @@ from pathlib import Path
 import numpy as np
 import pytest
 from matplotlib.collections import LineCollection
-from matplotlib.patches import FancyArrowPatch
+from matplotlib.patches import Circle, FancyArrowPatch
 
 import mtt
+from mtt.cli.main import main
 from mtt.derivation.causality import assign
 from mtt.derivation.pipeline import load
 from mtt.language.components import Role
@@ -21,16 +23,19 @@ from mtt.present import drawing
 from mtt.present.picture import BondPicture, problems
 
 ROOT = Path(__file__).resolve().parent.parent
-MODELS = sorted((ROOT / "models").glob("*.bg")) + sorted(
-    (ROOT / "tests" / "data" / "subsystems").glob("*.bg")
+SUBSYSTEMS = ROOT / "tests" / "data" / "subsystems"
+PARTS = sorted((ROOT / "models" / "parts").glob("*.bg")) + sorted(
+    (SUBSYSTEMS / "parts").glob("*.bg")
 )
+MODELS = sorted((ROOT / "models").glob("*.bg")) + sorted(SUBSYSTEMS.glob("*.bg")) + PARTS
 IDS = [str(path.relative_to(ROOT)) for path in MODELS]
 
 
 @cache
 def drawn(path: Path):
-    graph = load(path)
-    return graph, drawing.picture(graph, assign(graph))
+    """A model with its causal strokes; a part (alone) without: they are its parent's."""
+    graph = load(path, part=True)
+    return graph, drawing.picture(graph, None if graph.open_ports else assign(graph))
 
 
 def kinds(path: Path, *wanted: str) -> list[str]:
@@ -64,13 +69,16 @@ def test_bonds_do_not_cross(path):
 def test_sources_left_detectors_right(path):
     graph, picture = drawn(path)
     x = {name: label.centre[0] for name, label in picture.labels.items()}
-    assert x[graph.input] == min(x.values())  # the input is leftmost
+    if graph.input is not None:
+        assert x[graph.input] == min(x.values())  # the input is leftmost
     for bond in graph.bonds:
         for end, other in ((bond.tail, bond.head), (bond.head, bond.tail)):
             role = graph.component(end).type.role
-            if role is Role.SOURCE:
+            # a part's ports: those its bonds leave on the left, those they reach on the right
+            inward = role is Role.PORT and end == bond.tail
+            if role is Role.SOURCE or inward:
                 assert x[end] < x[other], f"{end} is not left of {other}"
-            if role is Role.DETECTOR:
+            if role is Role.DETECTOR or role is Role.PORT and not inward:
                 assert x[end] > x[other], f"{end} is not right of {other}"
 
 
@@ -222,4 +230,43 @@ def test_a_large_model_is_laid_out_in_one_row_clean_and_the_same_every_time():
     chain = [first.labels[f"s{i}"].centre for i in range(1, stages + 1)]
     assert np.ptp([c[1] for c in chain]) == pytest.approx(0, abs=1e-6)
     width, height = drawing.figure(graph).get_size_inches()
-    assert width == pytest.approx(drawing.MAX_INCHES) and height < 3  # drawn smaller, whole
+    assert width <= drawing.MAX_INCHES and height < 3
+
+
+@pytest.mark.parametrize("path", PARTS, ids=[str(p.relative_to(ROOT)) for p in PARTS])
+def test_a_part_is_drawn_alone_with_its_ports_as_open_ends(path):
+    graph, picture = drawn(path)
+    assert graph.open_ports and graph.output is None
+    for port in graph.open_ports:
+        label = picture.labels[port]
+        assert label.port and label.text == port.rpartition(".")[2]  # its name, no SS:
+    assert all(bond.stroke is None for bond in picture.bonds)
+    (ax,) = drawing.figure(graph).axes
+    circles = [p for p in ax.patches if isinstance(p, Circle)]
+    assert len(circles) == len(graph.open_ports)  # an open end at each port's bond
+    ends = [end for bond in picture.bonds for end in bond.ends]
+    for circle in circles:
+        assert min(np.linalg.norm(np.array(circle.center) - end) for end in ends) < 1e-9
+
+
+def test_mtt_check_and_draw_take_a_part_alone_and_derivation_does_not(tmp_path, capsys):
+    part = str(ROOT / "models" / "parts" / "absorber_stage.bg")
+    assert main(["check", part]) == 0
+    out = capsys.readouterr().out
+    assert "ok: part absorber_stage, 11 components, 10 bonds, ports liquid_in, gas_in" in out
+    assert main(["check", "--json", part]) == 0
+    record = json.loads(capsys.readouterr().out)
+    assert record["ok"] and record["input"] is None and record["ports"][-1] == "gas_out"
+    assert main(["draw", part, "-o", str(tmp_path / "stage.svg")]) == 0
+    assert "bond graph of part absorber_stage (ports liquid_in" in capsys.readouterr().out
+    svg = (tmp_path / "stage.svg").read_text()
+    assert ">liquid_in</text>" in svg and ">MSf:liquid</text>" in svg
+    assert main(["tf", part]) == 2  # a transfer function needs a model
+    assert "mtt check and mtt draw take a part alone" in capsys.readouterr().err
+
+
+def test_a_causal_conflict_inside_a_part_is_found_by_check(tmp_path, capsys):
+    part = tmp_path / "clash.bg"
+    part.write_text("model clash\nSS:in -> 0:n\nSe:a -> 0:n\nSe:b -> 0:n\n0:n -> R:r(1)\n")
+    assert main(["check", str(part)]) == 2
+    assert "error[causal_conflict]" in capsys.readouterr().err

@@ -66,6 +66,7 @@ def _check_one(file: str, args) -> tuple[dict, ModelError | None, BondGraph | No
     """Everything that can be told of a model before algebra: the language's rules, then
     causality and the structure (can the input reach the output, the unknowns matter);
     with --identifiability, whether the data can determine the unknowns (a warning)."""
+    from mtt.derivation.causality import assign
     from mtt.derivation.structure import causal_for
     from mtt.language.bondgraph import build
     from mtt.language.parse import parse
@@ -76,9 +77,12 @@ def _check_one(file: str, args) -> tuple[dict, ModelError | None, BondGraph | No
     notes = []
     try:
         parsed = parse(read_source(file))
-        graph = build(parsed, selection_from_args(args))
-        causal_for(graph, identify=True)
-        if args.identifiability:  # algebra: sympy and the transfer function
+        graph = build(parsed, selection_from_args(args), part=True)
+        if graph.open_ports:  # a part: its own rules and causality (its ports' is free)
+            assign(graph)
+        else:
+            causal_for(graph, identify=True)
+        if args.identifiability and not graph.open_ports:  # algebra: sympy and G(s)
             notes = identify.warnings(graph, choice_from_args(args))
     except ModelError as exc:
         problem = exc
@@ -105,10 +109,13 @@ def cmd_check(args) -> int:
             continue
         unknowns = graph.unknowns
         unknown = f", unknown{'s' * (len(unknowns) > 1)} {', '.join(unknowns)}" if unknowns else ""
+        ends = f"input {record['input']}, output {record['output']}"
+        if graph.open_ports:
+            ends = f"ports {', '.join(graph.open_ports)}"
+        kind = "part" if graph.open_ports else "model"
         print(
-            f"{file}: ok: model {graph.name}, {record['components']} components, "
-            f"{record['bonds']} bonds, input {record['input']}, output {record['output']}"
-            f"{unknown}"
+            f"{file}: ok: {kind} {graph.name}, {record['components']} components, "
+            f"{record['bonds']} bonds, {ends}{unknown}"
         )
     return status
 

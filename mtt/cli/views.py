@@ -82,10 +82,10 @@ def cmd_draw(args) -> int:
     from mtt.derivation.pipeline import load
     from mtt.present import drawing
 
-    graph = load(args.file, selection_from_args(args))
+    graph = load(args.file, selection_from_args(args), part=True)
     causal, problem = None, None
-    try:
-        causal = assign(graph)
+    try:  # a part's strokes depend on where it is used: it is drawn without
+        causal = None if graph.open_ports else assign(graph)
     except ModelError as exc:  # still worth a picture: without strokes, and say why
         problem = exc
         print(exc.render(), file=sys.stderr)
@@ -98,7 +98,8 @@ def cmd_draw(args) -> int:
              "warnings": [d.to_json() for d in problem.errors] if problem else []}
         )  # fmt: skip
     else:
-        print(f"wrote {args.out}: bond graph of {graph.name}")
+        what = f"part {graph.name} (ports {', '.join(graph.open_ports)})" if graph.open_ports else graph.name
+        print(f"wrote {args.out}: bond graph of {what}")
     return EXIT_OK
 
 

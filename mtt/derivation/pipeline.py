@@ -17,9 +17,9 @@ from mtt.language.subsystems import read_source
 __all__ = ["causal_for", "read_source", "load", "equations_for", "transfer_for", "theta_for"]
 
 
-def load(path: str | Path, selection: Selection | None = None) -> BondGraph:
-    """Text -> parse tree -> validated bond graph."""
-    return build(parse(read_source(path)), selection)
+def load(path: str | Path, selection: Selection | None = None, part: bool = False) -> BondGraph:
+    """Text -> parse tree -> validated bond graph (`part`: a part's file, alone, too)."""
+    return build(parse(read_source(path)), selection, part)
 
 
 DEFAULT_CHOICE = ParameterChoice()

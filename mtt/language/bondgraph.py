@@ -77,8 +77,8 @@ class BondGraph:
     named: MappingProxyType  # name -> Component, in model order
     bonds: tuple[Bond, ...]  # by number
     parameters: MappingProxyType  # name -> Parameter, in model order
-    input: str
-    output: str
+    input: str | None  # None only in a part (see `open_ports`)
+    output: str | None
     unknowns: tuple[str, ...]  # the parameters to identify, in order
     warnings: tuple[Diagnostic, ...]
     subsystems: tuple[Subsystem, ...] = ()  # depth first, in file order
@@ -92,6 +92,11 @@ class BondGraph:
     @property
     def components(self) -> tuple[Component, ...]:
         return tuple(self.named.values())
+
+    @property
+    def open_ports(self) -> tuple[str, ...]:
+        """A part's own SS ports, bonded on one side only (none in a model)."""
+        return tuple(c.name for c in self.named.values() if c.type.role is Role.PORT)
 
     @cached_property
     def graph(self) -> nx.MultiDiGraph:
@@ -144,7 +149,8 @@ class BondGraph:
 class _Whole:
     """The rules about the whole model: its unknowns, its input and its output."""
 
-    def __init__(self, root: Instance, assembly: Assembly, selection: Selection):
+    def __init__(self, root: Instance, assembly: Assembly, selection: Selection, part: bool):
+        self.part = part  # a part needs no input or output
         self.parsed = root.parsed
         self.assembly = assembly
         self.selection = selection
@@ -194,6 +200,8 @@ class _Whole:
             chosen, how = statements[0], ""
         elif len(candidates) == 1:
             return candidates[0].name
+        elif self.part:
+            return None
         else:
             what = "sources" if role is Role.SOURCE else "detectors"
             if not candidates:
@@ -234,12 +242,12 @@ def values_problems(parameters: dict, components, symbolic, overrides=None) -> l
     return check_values(values, (), ()) + check_values(values, symbolic, arguments)
 
 
-def _check_files(root: Instance) -> dict[str, FileCheck]:
+def _check_files(root: Instance, part: bool) -> dict[str, FileCheck]:
     """Each instance checked in its own scope, its subsystems first."""
     checks: dict[str, FileCheck] = {}
     for instance in reversed(list(root.walk())):
         children = {name: checks[child.name] for name, child in instance.children.items()}
-        checks[instance.name] = FileCheck(instance, children)
+        checks[instance.name] = FileCheck(instance, children, part and instance is root)
     return checks
 
 
@@ -251,20 +259,23 @@ def _once(diagnostics: list[Diagnostic]) -> list[Diagnostic]:
     return list(unique.values())
 
 
-def build(parsed: ParsedModel, selection: Selection | None = None) -> BondGraph:
+def build(parsed: ParsedModel, selection: Selection | None = None, part: bool = False) -> BondGraph:
     """Validate a parsed model (and its subsystems) and build its bond graph; raise
     `ModelError` listing every error.
 
     `selection` overrides the model's `unknown` declarations and its `input` and `output`
-    statements (the command line's --unknown, --input and --output).
+    statements (the command line's --unknown, --input and --output). With `part`, a file
+    with SS ports of its own is a part, checked (and drawn) alone: its ports stay open
+    ends, and it needs no input or output (its sources and detectors are its parent's).
     """
     if parsed.header is None or not parsed.bonds:
         what = "no statement" if parsed.header is None else "no bond"
         raise ModelError(parsed.source, [error("empty_model", f"the model has {what}")])
     root, problems = load_tree(parsed)
-    checks = _check_files(root)
+    checks = _check_files(root, part)
     assembly = assemble(root, checks)
-    whole = _Whole(root, assembly, selection or Selection())
+    part = part and any(c.type.role is Role.PORT for c in checks[root.name].components.values())
+    whole = _Whole(root, assembly, selection or Selection(), part)
     unknowns = whole.unknowns()
     input_name = whole.choose_port(Role.SOURCE)
     output_name = whole.choose_port(Role.DETECTOR)

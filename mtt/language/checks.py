@@ -1,7 +1,8 @@
 """The rules of the language that one file obeys on its own, checked file by file.
 
 A model file and each subsystem file are checked in their own scope, with their own
-names: parameters, components (SS ports only in a subsystem's file), arguments, names in
+names: parameters, components (SS ports only in a part: a subsystem's file, or a file
+checked or drawn alone as a part), arguments, names in
 expressions, signals, cycles, bonds and arities, and each subsystem statement against
 the file it reads (its bindings, its ports, their use and direction). What concerns the
 whole model (the unknowns, the input and output, signals read across subsystems) is
@@ -38,10 +39,10 @@ class FileCheck(SubsystemRules):
     relate a subsystem statement to the file it reads.
     """
 
-    def __init__(self, instance: Instance, children: dict[str, FileCheck]):
+    def __init__(self, instance: Instance, children: dict[str, FileCheck], part: bool = False):
         self.parsed: ParsedModel = instance.parsed
         self.origin: Origin = instance.origin
-        self.in_subsystem = instance.declaration is not None
+        self.ports_allowed = instance.declaration is not None or part  # a part's own ports
         self.children = children
         self.problems: list[Diagnostic] = []
         self.warnings: list[Diagnostic] = []
@@ -134,11 +135,11 @@ class FileCheck(SubsystemRules):
                     seen.name, kind, use.argument, seen.position, seen.description
                 )
         for name, component in self.components.items():
-            if component.type.role is Role.PORT and not self.in_subsystem:
+            if component.type.role is Role.PORT and not self.ports_allowed:
                 self.report(
                     "bad_port",
-                    f"{component.label}: SS ports belong to a file used as a subsystem, "
-                    "not to the model itself",
+                    f"{component.label}: SS ports belong to a part, a file used as a "
+                    "subsystem (mtt check and mtt draw take a part alone), not to a model",
                     component.position,
                 )
             elif component.type.modulated and component.argument is None:

@@ -25,7 +25,7 @@ def check_record(
         "errors": [d.to_json() for d in errors],
         "warnings": [d.to_json() for d in warnings],
         "model": None, "components": 0, "bonds": 0, "parameters": {}, "unknown": [],
-        "input": None, "output": None,
+        "input": None, "output": None, "ports": [],
     }  # fmt: skip
     if parsed is not None:
         record["model"] = parsed.header.name if parsed.header else None
@@ -41,8 +41,9 @@ def check_record(
         record["parameters"] = {
             p.name: None if p.value is None else str(p.value) for p in graph.parameters.values()
         }
-        record["input"] = graph.component(graph.input).label
-        record["output"] = graph.component(graph.output).label
+        record["input"] = graph.component(graph.input).label if graph.input else None
+        record["output"] = graph.component(graph.output).label if graph.output else None
+        record["ports"] = list(graph.open_ports)  # a part's own, checked alone
         record["unknown"] = list(graph.unknowns)
     return record
 
