@@ -98,7 +98,8 @@ def cmd_draw(args) -> int:
              "warnings": [d.to_json() for d in problem.errors] if problem else []}
         )  # fmt: skip
     else:
-        what = f"part {graph.name} (ports {', '.join(graph.open_ports)})" if graph.open_ports else graph.name
+        ports = ", ".join(graph.open_ports)
+        what = f"part {graph.name} (ports {ports})" if ports else graph.name
         print(f"wrote {args.out}: bond graph of {what}")
     return EXIT_OK
 
