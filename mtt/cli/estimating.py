@@ -17,8 +17,9 @@ import numpy as np
 from tqdm import tqdm
 
 from mtt.cli import unknowns
-from mtt.cli.experiment import Data, experiment_data, hold_of, module_for, signal_label
+from mtt.cli.experiment import experiment_data, hold_of, module_for, signal_label
 from mtt.cli.running import EXIT_OK, EXIT_STOPPED, UsageError, say, warn
+from mtt.data.records import Record
 from mtt.estimator import codegen
 from mtt.present import estimates, values
 from mtt.present.estimates import Run
@@ -39,7 +40,7 @@ def _filters(module: ModuleType, args) -> list[tuple[str, object]]:
     return filters or [(f"(1 + s)^{power}", None)]
 
 
-def run_all(module: ModuleType, data: Data, args) -> list[Run]:
+def run_all(module: ModuleType, data: Record, args) -> list[Run]:
     """One estimate per filter and starting value, with a progress bar on a terminal."""
     filters = _filters(module, args)
     options = dict(beta=args.beta, S0=args.S0, hold=hold_of(args), engine=args.engine,
@@ -76,7 +77,7 @@ def run_all(module: ModuleType, data: Data, args) -> list[Run]:
     return runs
 
 
-def _cost_range(runs: list[Run], data: Data, given: list[float] | None) -> tuple[float, float]:
+def _cost_range(runs: list[Run], data: Record, given: list[float] | None) -> tuple[float, float]:
     if given is not None:
         return given[0], given[1]
     points = [run.k0 for run in runs] + [value for run in runs for value in run.result.minima()]
@@ -147,7 +148,7 @@ def cmd_estimate(args) -> int:
     return EXIT_OK if all(run.result.ok for run in runs) else EXIT_STOPPED
 
 
-def _least_squares(module: ModuleType, data: Data, result, args, fits: dict) -> tuple:
+def _least_squares(module: ModuleType, data: Record, result, args, fits: dict) -> tuple:
     """(k_se, k_ls): the final estimate's standard error (a vector for several unknowns),
     that of the least-squares fit of the same cost J over the record, with the same filter
     and forgetting (its sandwich variance, which counts the colour of the equation error),

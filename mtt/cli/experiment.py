@@ -1,94 +1,34 @@
-"""`mtt compile`, `mtt simulate` and `mtt estimate`: the generated estimator at work.
+"""`mtt compile` and `mtt simulate`, and the experiment of `simulate`, `estimate` and `fit`.
 
-`compile` writes the estimator module. `simulate` and `estimate` build the same module
-in memory (codegen.load) and call its functions, so the algorithm exists once, in the
-template; what is here is the experiment around it: data, runs, tables and figures.
+`compile` writes the estimator module. The others build the same module in memory
+(codegen.load) and call its functions, so the algorithm exists once, in the template; the
+records come from mtt.data, their options from the command line (read here).
 """
 
 from __future__ import annotations
 
 import json
 import sys
-from dataclasses import dataclass
 from types import ModuleType
 
-import numpy as np
-
 from mtt.cli import unknowns
-from mtt.cli.experiment_args import DEFAULT_DT, DEFAULT_SEED, DEFAULT_T_END
 from mtt.cli.options import choice_from_args
 from mtt.cli.running import EXIT_OK, UsageError
+from mtt.data import default_hold, records
+from mtt.data.records import Record
 from mtt.derivation import pipeline
 from mtt.estimator import codegen
-from mtt.present import tables, values
-
-MAX_SAMPLES = 10**7
-
-
-# the data ------------------------------------------------------------------------------
-
-
-@dataclass(frozen=True)
-class Data:
-    t: np.ndarray
-    u: np.ndarray
-    y: np.ndarray
-    clean: np.ndarray | None  # the output before noise, when simulated
-    k: float | np.ndarray | None  # the true value(s), when simulated (an array: several)
-    note: str  # where the data came from, for tables and titles
-
-
-SIGNAL_KINDS = ("step", "prbs", "square", "multisine")
-
-
-def _signal(module: ModuleType, args) -> tuple[np.ndarray, np.ndarray, str]:
-    """The input samples and a description: a test signal on a regular grid from t = 0
-    (step by default), or a CSV file's t,u columns."""
-    kind = args.signal or "step"
-    if kind not in SIGNAL_KINDS:
-        if args.t_end is not None or args.dt is not None or args.period is not None:
-            raise UsageError(
-                "--t-end, --dt and --period apply to a test signal (--signal step|prbs|square|"
-                "multisine); the file gives the times"
-            )
-        t, u = module.read_csv(kind, ("t", "u"))
-        return t, u if args.amplitude is None else args.amplitude * u, kind
-    t_end = DEFAULT_T_END if args.t_end is None else args.t_end
-    dt = DEFAULT_DT if args.dt is None else args.dt
-    if not (0 < dt <= t_end < np.inf):
-        raise UsageError(f"need 0 < --dt <= --t-end, not --dt {dt} and --t-end {t_end}")
-    if not t_end / dt < MAX_SAMPLES:  # inf for --dt 5e-324: round() raised OverflowError
-        raise UsageError(
-            f"--t-end / --dt = {t_end / dt:.3g} samples is too many (at most {MAX_SAMPLES})"
-        )
-    count = max(1, round(t_end / dt))
-    if kind == "step" and args.period is not None:
-        raise UsageError("--period applies to prbs, square and multisine, not to a step")
-    t = np.linspace(0.0, t_end, count + 1)
-    amplitude = 1.0 if args.amplitude is None else args.amplitude
-    seed = DEFAULT_SEED if args.seed is None else args.seed
-    u = module.input_signal(kind, t, amplitude=amplitude, period=args.period, seed=seed)
-    described = (
-        "a unit step" if kind == "step" and amplitude == 1 else f"{kind}, amplitude {amplitude:g}"
-    )
-    if args.period is not None:
-        described += f", period {args.period:g}"
-    return t, u, described
-
-
-HELD_SIGNALS = ("step", "prbs", "square")  # piecewise constant between their samples
+from mtt.present import tables
 
 
 def hold_of(args) -> str:
-    """--hold, or its default: zoh for a test signal that is held by construction (the fit
-    of a simulated PRBS must not read its jumps as ramps), linear for measured data."""
+    """--hold, or its default (mtt.data.default_hold)."""
     if args.hold is not None:
         return args.hold
-    simulated = not getattr(args, "data", None) and (args.signal or "step") in HELD_SIGNALS
-    return "zoh" if simulated else "linear"
+    return default_hold(args.signal, measured=bool(getattr(args, "data", None)))
 
 
-def experiment_data(module: ModuleType, args, several: bool = False) -> list[Data]:
+def experiment_data(module: ModuleType, args, several: bool = False) -> list[Record]:
     """Measured data (each --data), or a simulation of the model with the chosen input and
     noise: one record unless `several` (fit) allows more."""
     simulation = {"--signal": args.signal, "--t-end": args.t_end, "--dt": args.dt}
@@ -104,72 +44,33 @@ def experiment_data(module: ModuleType, args, several: bool = False) -> list[Dat
                 f"{args.command} takes one --data ({len(args.data)} given); `mtt fit` combines "
                 "several experiments"
             )
-        names = columns(args.columns)
-        records = []
-        for path in args.data:
-            t, u, y = module.read_csv(path, names)
-            late = np.flatnonzero(np.diff(t) <= 0)
-            if late.size:  # named here: the module's message cannot name the file
-                i = int(late[0])
-                later, earlier = float(t[i + 1]), float(t[i])
-                raise UsageError(
-                    f"{path}: the times (column {names[0]!r}) must increase strictly: "
-                    f"{later!r} (data row {i + 2}) follows {earlier!r} (data row {i + 1})"
-                )
-            records.append(Data(t, u, y, None, None, f"{t.size} samples from {path}"))
-        return records
+        names = records.columns(args.columns)
+        return [records.read(module, path, names) for path in args.data]
     if getattr(args, "columns", None):
         raise UsageError("--columns names the columns of --data files")
-    t, u, source = _signal(module, args)
+    t, u, source = records.input_signal(
+        module, args.signal, t_end=args.t_end, dt=args.dt, period=args.period,
+        amplitude=args.amplitude, seed=args.seed,
+    )  # fmt: skip
     k = unknowns.true_point(module, args.true)
     if isinstance(k, list):
         example = ",".join(f"{name}=..." for name in k) if len(module.UNKNOWNS) > 1 else "V"
         raise UsageError(
             f"the model gives no value of {', '.join(k)} to simulate with: pass --true {example}"
         )
-    clean = module.simulate(t, u, k, hold=hold_of(args))
-    named = values.named(module, k, "g")
-    _finite(clean, t, named)
-    seed = DEFAULT_SEED if args.seed is None else args.seed
-    note = f"{t.size} samples simulated with {named}, input {source}"
-    y = clean
-    if args.noise_uniform:
-        noise = args.noise_uniform
-        if not 0 <= noise <= module.MAX_SIGNAL / 100:
-            raise UsageError(
-                f"--noise-uniform must be from 0 to {module.MAX_SIGNAL / 100:g}, not {noise:g}"
-            )
-        y = clean + np.random.default_rng(seed).uniform(-noise, noise, clean.size)
-        note += f", noise uniform in [-{noise:g}, {noise:g}] (seed {seed})"
-    elif args.noise_snr is not None:
-        if not np.isfinite(args.noise_snr):
-            raise UsageError(f"--noise-snr must be a finite number of dB, not {args.noise_snr}")
-        y = module.with_noise(clean, args.noise_snr, seed=seed)
-        note += f", white Gaussian noise at {args.noise_snr:g} dB SNR (seed {seed})"
-    return [Data(t, u, y, clean, k, note)]
-
-
-def _finite(y: np.ndarray, t: np.ndarray, named: str) -> None:
-    """Refuse a simulation that left floating point (NaN or inf samples were written as
-    data, with exit status 0; NaN and Infinity made invalid JSON); the noise added after
-    is bounded."""
-    bad = np.flatnonzero(~np.isfinite(y))
-    if bad.size:
-        raise UsageError(
-            f"the simulated output overflows at t = {t[bad[0]]:g}: the model is unstable with "
-            f"{named}, or its values are far from 1; shorten --t-end, choose another --true, "
-            "or give the parameters, the input and the noise in units nearer 1"
-        )
-
-
-def columns(text: str | None) -> tuple[str, str, str]:
-    """--columns T,U,Y: the names of the time, input and output columns."""
-    if text is None:
-        return ("t", "u", "y")
-    names = tuple(name.strip() for name in text.split(","))
-    if len(names) != 3 or not all(names) or len(set(names)) != 3:
-        raise UsageError(f"--columns takes three different names T,U,Y, not {text!r}")
-    return names
+    return [
+        records.simulate(
+            module,
+            t,
+            u,
+            k,
+            source=source,
+            hold=hold_of(args),
+            seed=args.seed,
+            noise_uniform=args.noise_uniform,
+            noise_snr=args.noise_snr,
+        )  # fmt: skip
+    ]
 
 
 # the commands --------------------------------------------------------------------------

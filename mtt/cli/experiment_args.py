@@ -11,8 +11,7 @@ import argparse
 from collections.abc import Callable
 
 from mtt.cli.options import BoundsAction, add_parameter_options, given, named_values
-
-DEFAULT_T_END, DEFAULT_DT, DEFAULT_SEED = 10.0, 0.01, 0
+from mtt.data import DEFAULT_DT, DEFAULT_SEED, DEFAULT_T_END
 
 
 def _implementation(name: str, module: str = "experiment") -> Callable[[argparse.Namespace], int]:

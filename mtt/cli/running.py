@@ -9,10 +9,12 @@ from __future__ import annotations
 
 import argparse
 import json
+import re
 import sys
 import warnings
 from collections.abc import Callable
 
+from mtt.data import DataError
 from mtt.estimator.advice import for_command_line
 
 EXIT_OK, EXIT_STOPPED, EXIT_USAGE = 0, 1, 2
@@ -40,6 +42,8 @@ def guarded(action: Callable[[argparse.Namespace], int]) -> Callable[[argparse.N
                 if not _handled(warning.category):
                     say(f"mtt {args.command}: warning: {warning.message}", stderr=True)
             return status
+        except DataError as exc:
+            message = as_options(exc)
         except (UsageError, ValueError) as exc:
             message = str(exc)
         except BrokenPipeError:  # stdout closed by its reader: main's business, not an error
@@ -55,6 +59,16 @@ def guarded(action: Callable[[argparse.Namespace], int]) -> Callable[[argparse.N
         return EXIT_USAGE
 
     return run
+
+
+def as_options(error: DataError) -> str:
+    """The message of mtt.data, its parameters named as this command line's options
+    (`t_end` is `--t-end`)."""
+    message = str(error)
+    for name in error.names:
+        option = "--" + name.replace("_", "-")
+        message = re.sub(rf"(?<![\w-]){re.escape(name)}(?![\w-])", option, message)
+    return message
 
 
 def _handled(category: type) -> bool:

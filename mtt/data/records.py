@@ -1,0 +1,157 @@
+"""Records: measured ones read from CSV files, simulated ones from a test signal (or an
+input read from a file) through the model's generated module, with optional noise.
+
+The generated module does the numerical work (read_csv, input_signal, simulate,
+with_noise); what is here chooses the grid, checks the settings, names the file a record
+came from and says in a note how each record was made (tables and figures print it).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+from types import ModuleType
+
+import numpy as np
+
+from mtt.data import (
+    DEFAULT_DT,
+    DEFAULT_SEED,
+    DEFAULT_T_END,
+    MAX_SAMPLES,
+    SIGNAL_KINDS,
+    DataError,
+)
+from mtt.present import values
+
+COLUMNS = ("t", "u", "y")
+
+
+@dataclass(frozen=True)
+class Record:
+    """One experiment's samples: times, input and output (float arrays of one length)."""
+
+    t: np.ndarray
+    u: np.ndarray
+    y: np.ndarray
+    clean: np.ndarray | None  # the output before noise, when simulated
+    k: float | np.ndarray | None  # the true value(s), when simulated (an array: several)
+    note: str  # where the record came from, for tables and titles
+
+
+def columns(given: str | Sequence[str] | None) -> tuple[str, str, str]:
+    """The names of the time, input and output columns: "T,U,Y" or three names."""
+    if given is None:
+        return COLUMNS
+    parts = given.split(",") if isinstance(given, str) else list(given)
+    names = tuple(str(name).strip() for name in parts)
+    if len(names) != 3 or not all(names) or len(set(names)) != 3:
+        raise DataError(f"columns takes three different names T,U,Y, not {given!r}", "columns")
+    return names
+
+
+def read(module: ModuleType, path: str, names: Sequence[str] = COLUMNS) -> Record:
+    """A measured record: the columns `names` (time, input, output) of a CSV file, its
+    times increasing strictly."""
+    t, u, y = module.read_csv(path, tuple(names))
+    late = np.flatnonzero(np.diff(t) <= 0)
+    if late.size:  # named here: the module's message cannot name the file
+        i = int(late[0])
+        later, earlier = float(t[i + 1]), float(t[i])
+        raise DataError(
+            f"{path}: the times (column {names[0]!r}) must increase strictly: "
+            f"{later!r} (data row {i + 2}) follows {earlier!r} (data row {i + 1})"
+        )
+    return Record(t, u, y, None, None, f"{t.size} samples from {path}")
+
+
+def input_signal(
+    module: ModuleType,
+    signal: str | None = None,
+    *,
+    t_end: float | None = None,
+    dt: float | None = None,
+    period: float | None = None,
+    amplitude: float | None = None,
+    seed: int | None = None,
+) -> tuple[np.ndarray, np.ndarray, str]:
+    """The input samples and a description: a test signal (step, the default, prbs, square
+    or multisine) on a regular grid from t = 0, or the t,u columns of the CSV file `signal`."""
+    kind = signal or "step"
+    if kind not in SIGNAL_KINDS:
+        if t_end is not None or dt is not None or period is not None:
+            raise DataError(
+                "t_end, dt and period apply to the test signals (signal step|prbs|square|"
+                "multisine); the file gives the times",
+                *("t_end", "dt", "period", "signal"),
+            )
+        t, u = module.read_csv(kind, ("t", "u"))
+        return t, u if amplitude is None else amplitude * u, kind
+    t_end = DEFAULT_T_END if t_end is None else t_end
+    dt = DEFAULT_DT if dt is None else dt
+    if not (0 < dt <= t_end < np.inf):
+        raise DataError(f"need 0 < dt <= t_end, not dt {dt} and t_end {t_end}", "dt", "t_end")
+    if not t_end / dt < MAX_SAMPLES:  # inf for dt = 5e-324: round() raised OverflowError
+        raise DataError(
+            f"t_end / dt = {t_end / dt:.3g} samples is too many (at most {MAX_SAMPLES})",
+            *("t_end", "dt"),
+        )
+    if kind == "step" and period is not None:
+        raise DataError("period applies to prbs, square and multisine, not to a step", "period")
+    t = np.linspace(0.0, t_end, max(1, round(t_end / dt)) + 1)
+    amplitude = 1.0 if amplitude is None else amplitude
+    seed = DEFAULT_SEED if seed is None else seed
+    u = module.input_signal(kind, t, amplitude=amplitude, period=period, seed=seed)
+    described = (
+        "a unit step" if kind == "step" and amplitude == 1 else f"{kind}, amplitude {amplitude:g}"
+    )
+    if period is not None:
+        described += f", period {period:g}"
+    return t, u, described
+
+
+def simulate(
+    module: ModuleType,
+    t: np.ndarray,
+    u: np.ndarray,
+    k: float | np.ndarray,
+    *,
+    source: str,
+    hold: str,
+    noise_uniform: float | None = None,
+    noise_snr: float | None = None,
+    seed: int | None = None,
+) -> Record:
+    """A simulated record: the model's output at the unknowns' values k for the input u
+    (`source` describes it), with noise uniform in [-noise_uniform, noise_uniform] or white
+    Gaussian at noise_snr dB."""
+    clean = module.simulate(t, u, k, hold=hold)
+    named = values.named(module, k, "g")
+    bad = np.flatnonzero(~np.isfinite(clean))  # NaN or inf written as data, invalid JSON
+    if bad.size:
+        raise DataError(
+            f"the simulated output overflows at t = {t[bad[0]]:g}: the model is unstable with "
+            f"{named}, or its values are far from 1; shorten t_end, choose other true values, "
+            "or give the parameters, the input and the noise in units nearer 1",
+            "t_end",
+        )
+    seed = DEFAULT_SEED if seed is None else seed
+    note = f"{t.size} samples simulated with {named}, input {source}"
+    y = clean
+    if noise_uniform:
+        if not 0 <= noise_uniform <= module.MAX_SIGNAL / 100:
+            raise DataError(
+                f"noise_uniform must be from 0 to {module.MAX_SIGNAL / 100:g}, not "
+                f"{noise_uniform:g}",
+                "noise_uniform",
+            )
+        y = clean + np.random.default_rng(seed).uniform(-noise_uniform, noise_uniform, clean.size)
+        note += f", noise uniform in [-{noise_uniform:g}, {noise_uniform:g}] (seed {seed})"
+    elif noise_snr is not None:
+        if not np.isfinite(noise_snr):
+            raise DataError(
+                f"noise_snr must be a finite number of dB, not {noise_snr}", "noise_snr"
+            )
+        y = module.with_noise(clean, noise_snr, seed=seed)
+        note += f", white Gaussian noise at {noise_snr:g} dB SNR (seed {seed})"
+    return Record(t, u, y, clean, k, note)
