@@ -59,15 +59,34 @@ def _private(name: str) -> bool:
     return name.startswith("_") and not (name.startswith("__") and name.endswith("__"))
 
 
-def analyse(root: Path) -> tuple[nx.DiGraph, list[str]]:
-    """The graph of imports between the modules of `root`/mtt, and every private name one
-    module takes from another (`from mtt.a import _x`, or `a._x` on an imported module `a`)."""
+def defined(tree: ast.Module) -> set[str] | None:
+    """The names a module defines at its top level (None: any, it has a __getattr__)."""
+    names = set()
+    for node in ast.walk(tree):
+        if isinstance(node, ast.FunctionDef | ast.AsyncFunctionDef | ast.ClassDef):
+            names.add(node.name)
+        elif isinstance(node, ast.Name) and isinstance(node.ctx, ast.Store):
+            names.add(node.id)
+        elif isinstance(node, ast.alias):
+            names.add(node.asname or node.name.partition(".")[0])
+    return None if "__getattr__" in names else names
+
+
+def analyse(root: Path) -> tuple[nx.DiGraph, list[str], list[str]]:
+    """The graph of imports between the modules of `root`/mtt, every private name one
+    module takes from another (`from mtt.a import _x`, or `a._x` on an imported module `a`),
+    and every name imported from a module of mtt that does not define it (a lazy import
+    fails only when its function runs)."""
     modules = find_modules(root)
+    trees = {
+        name: ast.parse(path.read_text(encoding="utf-8"), filename=str(path))
+        for name, path in modules.items()
+    }
     graph = nx.DiGraph()
     graph.add_nodes_from(modules)
-    private = []
+    private, missing = [], []
     for name, path in modules.items():
-        tree = ast.parse(path.read_text(encoding="utf-8"), filename=str(path))
+        tree = trees[name]
         aliases = {}  # a name bound to an mtt module -> that module
         for node in _imports(tree):
             where = f"{path.relative_to(root)}:{node.lineno}"
@@ -87,6 +106,9 @@ def analyse(root: Path) -> tuple[nx.DiGraph, list[str]]:
                     aliases[alias.asname or alias.name] = submodule
                     continue
                 graph.add_edge(name, source)
+                names = defined(trees[source])
+                if names is not None and alias.name not in names:
+                    missing.append(f"{where}: {alias.name} from {source}")
                 if _private(alias.name) and source != name:
                     private.append(f"{where}: {alias.name} from {source}")
         for node in ast.walk(tree):
@@ -100,11 +122,11 @@ def analyse(root: Path) -> tuple[nx.DiGraph, list[str]]:
                 where = f"{path.relative_to(root)}:{node.lineno}"
                 private.append(f"{where}: {node.attr} of {aliases[node.value.id]}")
     graph.remove_edges_from(nx.selfloop_edges(graph))
-    return graph, private
+    return graph, private, missing
 
 
 MODULES = find_modules(ROOT)
-GRAPH, PRIVATE = analyse(ROOT)
+GRAPH, PRIVATE, MISSING = analyse(ROOT)
 
 
 def test_no_import_cycles_in_mtt():
@@ -114,6 +136,10 @@ def test_no_import_cycles_in_mtt():
 
 def test_no_private_name_is_used_across_modules():
     assert not PRIVATE, "private names used across modules:\n" + "\n".join(PRIVATE)
+
+
+def test_every_name_imported_from_mtt_exists():
+    assert not MISSING, "imported but not defined:\n" + "\n".join(MISSING)
 
 
 def test_only_the_command_line_imports_the_command_line():
@@ -141,6 +167,7 @@ CYCLE = {
     "mtt/a.py": "from mtt import b\n",
     "mtt/b.py": "def f():\n    from mtt.c import _helper\n",
     "mtt/c.py": "import mtt.a\n_helper = 1\n",
+    "mtt/e.py": "def f():\n    from mtt.c import gone\n",
     "mtt/d.py": "from typing import TYPE_CHECKING\nif TYPE_CHECKING:\n    from mtt import a\n"
     "from mtt import c\nx = c._helper\n",
 }
@@ -154,8 +181,9 @@ def test_the_checks_find_a_cycle_and_a_private_name(tmp_path, lazy):
         path = tmp_path / relative
         path.parent.mkdir(exist_ok=True)
         path.write_text(text if lazy else text.replace("def f():\n    ", ""))
-    graph, private = analyse(tmp_path)
+    graph, private, missing = analyse(tmp_path)
     assert list(nx.simple_cycles(graph)) and not graph.has_edge("mtt.d", "mtt.a")
+    assert [line.split(": ", 1)[1] for line in missing] == ["gone from mtt.c"]
     assert [line.split(": ", 1)[1] for line in private] == [
         "_helper from mtt.c",
         "_helper of mtt.c",

@@ -47,7 +47,8 @@ def mode(args) -> str | None:
 
 def cmd_fit_many(args, kind: str) -> int:
     from mtt.batch import api
-    from mtt.cli.experiment import checked_module, columns
+    from mtt.cli.experiment import checked_module
+    from mtt.data import records
     from mtt.cli.fit_options import options
     from mtt.cli.options import choice_from_args
     from mtt.derivation import pipeline
@@ -71,7 +72,7 @@ def cmd_fit_many(args, kind: str) -> int:
         with _bar(len(args.data), kind) as bar:
             batch = api.fit_many(
                 found, args.data, executor=client, jobs=None if client else (args.jobs or 1),
-                pooled=kind == "pooled", columns=columns(args.columns),
+                pooled=kind == "pooled", columns=records.columns(args.columns),
                 progress=lambda done, total: bar.update(done - bar.n), **options(module, args),
             )  # fmt: skip
     except MttError as error:
