@@ -48,9 +48,9 @@ def mode(args) -> str | None:
 def cmd_fit_many(args, kind: str) -> int:
     from mtt.batch import api
     from mtt.cli.experiment import checked_module
-    from mtt.data import records
     from mtt.cli.fit_options import options
     from mtt.cli.options import choice_from_args
+    from mtt.data import records
     from mtt.derivation import pipeline
     from mtt.estimator import codegen
     from mtt.language.diagnostics import MttError
