@@ -19,6 +19,7 @@ import sympy
 
 from mtt.estimator.codegen import environment, is_name, load_source, shadows
 from mtt.estimator.kernels import Frozen, Kernel, KernelError, freeze, kernel
+from mtt.estimator.rosenbrock import sensitivity_kernel, step_kernel
 from mtt.language.diagnostics import ModelError, Source, error
 from mtt.version import __version__
 
@@ -28,8 +29,6 @@ if TYPE_CHECKING:
 # Keyword names of the generated functions: a kept parameter (a keyword argument) must
 # not take one of them.
 RESERVED = frozenset({"t", "u", "k", "x", "x0", "hold", "rtol", "atol", "known"})
-# The kernels every module defines, in the order of its _Kernels tuple.
-KERNELS = ("rhs", "output", "jacobian", "switches", "modes", "switch_gradient", "second")
 
 
 def _fail(system: NonlinearStateSpace, kind: str, message: str) -> ModelError:
@@ -95,6 +94,8 @@ def _kernels(system: NonlinearStateSpace, kept: list[sympy.Symbol]) -> tuple[Fro
         ]
 
     second_names = names | {s_: s_.name for s_ in v} | {du: "du"}
+    zeros = {(i, j) for i in range(n) for j in range(n) if f_x[i, j] == 0}
+    rest = [names[a] for a in arguments[n + 1 :]]
     kernels = [
         kernel("rhs", arguments, list(f), names),
         kernel("output", arguments, [g], names),
@@ -108,6 +109,8 @@ def _kernels(system: NonlinearStateSpace, kept: list[sympy.Symbol]) -> tuple[Fro
             names,
         ),
         kernel("second", [*arguments, *v, du], along(f_x) + along(f_k), second_names),
+        step_kernel(n, zeros, rest),
+        sensitivity_kernel(n, len(k), zeros, rest),
     ]
     return frozen, kernels
 
