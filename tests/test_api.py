@@ -195,7 +195,7 @@ def test_several_unknowns_go_to_scipy_and_control_as_a_vector_a_dict_or_by_name(
 def test_to_control_without_python_control_says_how_to_install(dc_drive, monkeypatch):
     monkeypatch.setitem(sys.modules, "control", None)  # import control -> ImportError
     error = kind_of(dc_drive.to_control, 10)
-    assert error.kind == "missing_dependency" and "mtt[control]" in str(error)
+    assert error.kind == "missing_dependency" and "pip install -e '.[control]'" in str(error)
 
 
 # the estimator -------------------------------------------------------------------------

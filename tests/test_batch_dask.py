@@ -2,7 +2,7 @@
 once for the module. Per-record and pooled fits give the numbers of this process; a worker
 killed mid-run costs nothing but time; the workers import mtt's worker module alone.
 
-`pip install 'mtt[dask]'` (the test extra has it); without dask these tests are skipped.
+`pip install -e '.[dask]'` in mtt's clone (the test extra has it); without dask they are skipped.
 """
 
 from __future__ import annotations
@@ -17,7 +17,7 @@ from batch_records import CORRUPT, kill, logs, same_numbers
 from mtt.batch import fit_many
 
 distributed = pytest.importorskip(
-    "distributed", reason="dask.distributed is not installed: pip install 'mtt[dask]'"
+    "distributed", reason="dask.distributed is not installed: pip install -e '.[dask]'"
 )
 
 __all__ = ["logs"]  # the fixture

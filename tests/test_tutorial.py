@@ -5,7 +5,18 @@ from __future__ import annotations
 
 import pytest
 import tutorial
-from tutorial import NOTEBOOK, TUTORIAL, figures, matches, notebook, report, run, steps
+from tutorial import (
+    NOTEBOOK,
+    TUTORIAL,
+    execute,
+    figures,
+    matches,
+    notebook,
+    report,
+    run,
+    shell_line,
+    steps,
+)
 
 MARKDOWN = TUTORIAL.read_text("utf-8")
 
@@ -27,6 +38,27 @@ def test_the_tutorial_prints_what_it_shows(tmp_path):
 def test_the_notebook_is_made_from_the_tutorial():
     pytest.importorskip("nbformat", reason="the notebook's format (pip install '.[test]')")
     assert NOTEBOOK.read_text("utf-8") == notebook(MARKDOWN), "python tests/tutorial.py --notebook"
+
+
+def test_the_notebook_runs_anywhere_and_its_commands_print_what_the_tutorial_shows(
+    tmp_path, monkeypatch
+):
+    """Executed as a reader's Jupyter would (nbclient, a fresh kernel) with no venv on PATH:
+    any cell that raises fails it, and each command prints what the tutorial shows."""
+    pytest.importorskip("nbclient", reason="runs the notebook (pip install -e '.[test]')")
+    monkeypatch.setenv("PATH", "/usr/bin:/bin")  # `mtt` is not on it: the notebook must not need it
+    cells = dict(execute(NOTEBOOK, tmp_path))
+    commands = [step for step in steps(MARKDOWN) if step.kind == "command"]
+    printed = {step: next(out for src, out in cells.items() if src.endswith(shell_line(step.text)))
+               for step in commands}  # fmt: skip
+    differences = [
+        f"{TUTORIAL.name}:{step.line}: {step.text}\n  expected:\n{step.expected}\n  got:\n{out}"
+        for step, out in printed.items()
+        if not matches(step.expected, out)
+    ]
+    assert not differences, "\n".join(differences)
+    for name in figures(MARKDOWN):
+        assert (tmp_path / name).stat().st_size > 1000
 
 
 @pytest.mark.parametrize(

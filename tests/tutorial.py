@@ -262,10 +262,24 @@ def report(result: Result) -> str:
     return "\n".join(lines)
 
 
+# The notebook runs `mtt` and `python` with its kernel's interpreter, wherever that is (a
+# kernel's PATH need not have the venv's bin directory).
+SHELL_SETUP = "import sys  # the commands below run mtt with this notebook's Python, sys.executable"
+
+
+def shell_line(command: str) -> str:
+    """A tutorial command as a notebook's shell line: `mtt ARGS` as `python -m mtt ARGS`,
+    `python ARGS` with the kernel's interpreter."""
+    command = STATUS.sub("", command)
+    program, _, rest = command.partition(" ")
+    prefix = {"mtt": "{sys.executable} -m mtt", "python": "{sys.executable}"}[program]
+    return f"!{prefix} {rest}"
+
+
 def notebook(markdown: str) -> str:
     """The tutorial as a Jupyter notebook: its prose as Markdown cells, each model file as a
-    `%%writefile` cell, each console block as `!` commands, each Python block as code;
-    the outputs are left to the notebook to make. Deterministic: cells are numbered."""
+    `%%writefile` cell, each command as a `!` line of its own cell, each Python block as
+    code; the outputs are left to the notebook to make. Deterministic: cells are numbered."""
     import nbformat
 
     cells, position = [], 0
@@ -283,8 +297,10 @@ def notebook(markdown: str) -> str:
             cells.append(nbformat.v4.new_code_cell(f"%%writefile {name}\n{block.body}".strip()))
         elif block.language == "console":
             prose(markdown[position : block.start])
-            lines = [f"!{STATUS.sub('', step.text)}" for step in _commands(block)]
-            cells.append(nbformat.v4.new_code_cell("\n".join(lines)))
+            if not any(cell.source == SHELL_SETUP for cell in cells):
+                cells.append(nbformat.v4.new_code_cell(SHELL_SETUP))
+            for step in _commands(block):  # a cell each: its output is the command's
+                cells.append(nbformat.v4.new_code_cell(shell_line(step.text)))
         elif block.language == "python":
             prose(markdown[position : block.start])
             cells.append(nbformat.v4.new_code_cell(block.body.strip()))
@@ -303,6 +319,43 @@ def notebook(markdown: str) -> str:
     )
     nbformat.validate(book)
     return nbformat.writes(book) + "\n"
+
+
+def execute(path: Path, directory: Path) -> list[tuple[str, str]]:
+    """Run the notebook at `path` in `directory` with a fresh kernel of this interpreter
+    (its own kernel spec: a machine's `python3` may be another Python), as Jupyter runs it;
+    nbclient raises CellExecutionError at the first cell that fails. Each code cell's
+    source and the text it printed."""
+    import json
+    import os
+
+    import nbclient
+    import nbformat
+
+    book = nbformat.reads(path.read_text("utf-8"), as_version=4)
+    spec = directory / ".jupyter" / "kernels" / "mtt-tutorial"
+    spec.mkdir(parents=True)
+    argv = [sys.executable, "-m", "ipykernel_launcher", "-f", "{connection_file}"]
+    (spec / "kernel.json").write_text(json.dumps({"argv": argv, "language": "python",
+                                                  "display_name": "mtt"}))  # fmt: skip
+    previous = os.environ.get("JUPYTER_PATH")
+    os.environ["JUPYTER_PATH"] = str(directory / ".jupyter")
+    try:
+        where = {"metadata": {"path": str(directory)}}
+        client = nbclient.NotebookClient(
+            book, timeout=300, kernel_name="mtt-tutorial", resources=where
+        )
+        client.execute()
+    finally:
+        if previous is None:
+            del os.environ["JUPYTER_PATH"]
+        else:
+            os.environ["JUPYTER_PATH"] = previous
+    return [
+        (cell.source, "".join(o.get("text", "") for o in cell.outputs if o.output_type == "stream"))
+        for cell in book.cells
+        if cell.cell_type == "code"
+    ]
 
 
 def main(argv: list[str] | None = None) -> int:

@@ -254,7 +254,7 @@ class Model:
 
     def to_control(self, k: object = None, **known: object):
         """python-control's TransferFunction at unknown = k, given as to `to_scipy`
-        (pip install 'mtt[control]').
+        (pip install -e '.[control]' in mtt's clone).
 
         >>> import mtt
         >>> G = mtt.load(mtt.example("dc_drive")).to_control(10)
@@ -267,7 +267,7 @@ class Model:
             import control
         except ImportError:
             raise MttError(
-                "to_control needs python-control: pip install 'mtt[control]'",
+                "to_control needs python-control: pip install -e '.[control]' in mtt's clone",
                 kind="missing_dependency",
             ) from None
         return control.tf(*self._coefficients(k, known))

@@ -101,7 +101,7 @@ def _parquet(path: str, columns):
         pandas = importlib.import_module("pandas")
     except ImportError:
         raise ValueError(
-            f"{path}: reading Parquet needs pandas: pip install 'mtt[parquet]'"
+            f"{path}: reading Parquet needs pandas: pip install -e '.[parquet]' in mtt's clone"
         ) from None
     try:
         frame = pandas.read_parquet(path, columns=list(columns))

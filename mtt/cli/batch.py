@@ -99,7 +99,9 @@ def _client(address: str):
     try:
         from distributed import Client
     except ImportError:
-        raise UsageError("--scheduler needs dask.distributed: pip install 'mtt[dask]'") from None
+        raise UsageError(
+            "--scheduler needs dask.distributed: pip install -e '.[dask]' in mtt's clone"
+        ) from None
     try:
         return Client(address, timeout=CONNECT_TIMEOUT)
     except (OSError, TimeoutError, ValueError) as error:

@@ -135,7 +135,8 @@ def _batch_options(parser: argparse.ArgumentParser) -> None:
     where.add_argument(
         "--scheduler",
         metavar="ADDRESS",
-        help="run on a dask.distributed scheduler (tcp://host:8786; pip install 'mtt[dask]')",
+        help="run on a dask.distributed scheduler (tcp://host:8786; pip install -e '.[dask]' "
+        "in mtt's clone)",
     )
 
 
