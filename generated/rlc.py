@@ -2945,6 +2945,52 @@ def _with_nuisances(t, u, y, k, *, hold: str, offset: bool, initial_state: bool,
     return forced + Xi @ nu, value, real.V @ z0
 
 
+# Validation on a new record: the fitted model against a record it was not fitted to -----------
+#
+# A new record starts wherever the system was and around its own operating point, so its
+# initial state and output offset are estimated (`_with_nuisances`: exactly, by least
+# squares) before the model's output is compared with it, as MATLAB's `compare` does.
+
+INITIAL_STATES = ("zero", "estimate")  # Fit.simulate: from rest, or fitted to the record
+
+
+@dataclass(frozen=True)
+class Comparison:
+    """A fitted model against one record (`Fit.compare`), usually one it was not fitted to.
+
+    fit_percent: 100 (1 - |y - y^| / |y - mean y|) (NaN for a constant y); residual_rms: the
+    RMS of y - y^; y^ the model's output with the record's own output offset and initial
+    state estimated by least squares (`estimated` says so: a new record starts wherever the
+    system was, not at the fit's operating point); offset, initial_state: those estimates
+    (x(t_0) in scipy.signal.tf2ss's realisation of G(s, k^)); samples: the record's length;
+    fitted, residuals: y^ and y - y^ (None once `without_signals` dropped them).
+    """
+
+    fit_percent: float
+    residual_rms: float
+    offset: float
+    initial_state: np.ndarray
+    samples: int
+    estimated: str = "its initial state and output offset estimated by least squares"
+    fitted: np.ndarray | None = field(default=None, repr=False)
+    residuals: np.ndarray | None = field(default=None, repr=False)
+
+    def without_signals(self) -> "Comparison":
+        return replace(self, fitted=None, residuals=None)
+
+
+def _compare(t, u, y, k, *, hold: str, known: dict) -> Comparison:
+    t, u, y = _in_range(_signals(("t", t), ("u", u), ("y", y), minimum=2), "")
+    fitted, offset, state = _with_nuisances(t, u, y, k, hold=hold, offset=True,
+                                            initial_state=True, known=known)  # fmt: skip
+    residuals = y - fitted
+    deviations = float(np.sum((y - y.mean()) ** 2))
+    rss = float(residuals @ residuals)
+    percent = 100.0 * (1.0 - math.sqrt(rss / deviations)) if deviations > 0 else math.nan
+    return Comparison(percent, math.sqrt(rss / t.size), offset, state, t.size,
+                      fitted=fitted, residuals=residuals)  # fmt: skip
+
+
 # The batch fit: whole records, unbiased under output noise, with the uncertainty of k -------------
 
 FIT_METHODS = ("iv", "ls")  # refined instrumental variables (default), least squares
@@ -3013,16 +3059,37 @@ class Fit:
             return _value(self.coefficients, np.asarray(k, dtype=float))
         return _evaluate(_tensor(self.coefficients), np.asarray(k, dtype=float))
 
-    def simulate(self, t, u, record: int = 0) -> np.ndarray:
-        """The fitted model's output for input u at times t, from rest at the operating
-        point of record `record` (its offset added)."""
-        if not self.ok:
-            raise ValueError(f"no fitted model to simulate: {self.message}")
+    def simulate(self, t, u, record: int = 0, *, initial_state: str = "zero",
+                 y=None) -> np.ndarray:  # fmt: skip
+        """The fitted model's output for input u at times t. initial_state="zero": from rest
+        at the operating point of record `record` (its offset added); "estimate": with the
+        initial state and output offset of the record (t, u, y) fitted to its output y by
+        least squares (a new record starts wherever the system was; see `compare`)."""
+        if _choice("initial_state", initial_state, INITIAL_STATES) == "estimate":
+            if y is None:
+                raise ValueError('initial_state="estimate" fits the record\'s initial state '
+                                 "and offset to its output: give y")  # fmt: skip
+            return _with_nuisances(t, u, y, self._model(), hold=self.hold, offset=True,
+                                   initial_state=True, known=self.known)[0]  # fmt: skip
+        if y is not None:
+            raise ValueError('y is for initial_state="estimate"; initial_state="zero" '
+                             "simulates from rest")  # fmt: skip
         offset = self.offsets[_index_of("record", record, len(self.offsets))]
         if math.isnan(offset):
             raise ValueError("the record's operating point was not estimated (a fit with "
                              "uncertainty=False): fit with uncertainty=True, or offset=False")  # fmt: skip
-        return simulate(t, u, self.k, hold=self.hold, **self.known) + offset
+        return simulate(t, u, self._model(), hold=self.hold, **self.known) + offset
+
+    def compare(self, t, u, y) -> "Comparison":
+        """The fitted model against a record (t, u, y), usually a new one (validation): fit %
+        and residual RMS with that record's initial state and offset estimated."""
+        return _compare(t, u, y, self._model(), hold=self.hold, known=self.known)
+
+    def _model(self):
+        """k, if there is a fitted model (else a ValueError saying why not)."""
+        if not np.all(np.isfinite(self.k)):
+            raise ValueError(f"no fitted model: {self.message}")
+        return self.k
 
 
 def _index_of(name: str, value, count: int) -> int:
