@@ -37,6 +37,8 @@ How to use it
     # the whole record: unbiased under noise, with its standard error and warnings
     result = absorber_stages.fit(t, u, y, hold="zoh")
     result.k, result.k_se, result.ci, result.fit_percent, result.warnings
+    # a new record of the same system (its own initial state and offset estimated):
+    result.compare(t2, u2, y2).fit_percent
     # the paper's recursive estimate from k0, and the global minimiser of its cost J:
     run = absorber_stages.estimate(t, u, y, k0=0.36, hold="zoh")
     run.k, run.global_k[-1], run.minima()
@@ -46,7 +48,7 @@ How to use it
 
 or, from data in CSV files with a header row and columns t, u, y (--columns to rename):
 
-    python absorber_stages.py fit run1.csv run2.csv --hold zoh [--json]
+    python absorber_stages.py fit run1.csv run2.csv --hold zoh [--validate run3.csv] [--json]
     python absorber_stages.py estimate data.csv --k0 0.36
 
 API (the unknown is always called k here)
@@ -55,7 +57,10 @@ API (the unknown is always called k here)
     simulate(t, u, k, *, hold="linear", **known) -> y, exact for the stated hold
     fit(t, u, y, *, method="iv", C="auto", k0=None, bounds=None, offset=True,
         initial_state=True, hold="linear", beta=0.0, **known) -> Fit: k, k_se, ci,
-                                    fit_percent, residual_rms, warnings, minima, simulate()
+                                    fit_percent, residual_rms, warnings, minima,
+                                    simulate(t, u, initial_state="zero"|"estimate", y=None),
+                                    compare(t, u, y) -> Comparison: fit_percent, residual_rms
+                                    on a new record, its initial state and offset estimated
     moments(t, u, y, *, k=None, C=None, hold="linear", offset=True, initial_state=True,
             **known) -> Moments: one record's statistics for a step of fit (they add)
     fit_records(records, *, keep=True, ...) -> Fit: fit over Records([(t, u, y), ...]) or
@@ -3973,6 +3978,9 @@ def _parser() -> argparse.ArgumentParser:
     fit_.add_argument("--initial-state", action=argparse.BooleanOptionalAction, default=True,
                       help="allow a non-zero initial state (default on)")  # fmt: skip
     fit_.add_argument("--beta", type=float, default=0.0, help="forgetting factor (0)")
+    fit_.add_argument("--validate", action="append", default=[], metavar="FILE",
+                      help="a CSV record to validate the fitted model on, its initial state and "
+                      "offset estimated (repeat for more)")  # fmt: skip
     estimate_ = commands.add_parser("estimate", help="the paper's recursive estimate from k0")
     estimate_.add_argument("data", help="the CSV file")
     estimate_.add_argument("--k0", nargs="+", required=True, metavar="V|NAME=V,...",
@@ -4031,6 +4039,13 @@ def _fit_main(args, known) -> tuple[dict, list[str], int]:
         ] + [quality]
     if not result.ok:
         lines.append(f"  {result.message}")
+    if args.validate and np.all(np.isfinite(result.k)):
+        record["validation"] = []
+        for path in args.validate:
+            comparison = result.compare(*read_csv(path, columns))
+            record["validation"].append(dict(data=path, **comparison_record(comparison)))
+            lines.append(f"validation on {path}: fit {comparison.fit_percent:.4g} %, residual "
+                         f"RMS {comparison.residual_rms:.3g} ({comparison.estimated})")  # fmt: skip
     return record, lines, 0 if result.ok else 1
 
 
@@ -4046,6 +4061,15 @@ def fit_record(result: Fit) -> dict:
         iterations=result.iterations, method=result.method,
         offsets=[_plain(v) for v in result.offsets], filter=_plain(result.filter),
         message=result.message,
+    )  # fmt: skip
+
+
+def comparison_record(comparison: Comparison) -> dict:
+    """A Comparison (Fit.compare) as plain JSON-able values, without its signals."""
+    return dict(
+        fit_percent=_plain(comparison.fit_percent), residual_rms=_plain(comparison.residual_rms),
+        offset=_plain(comparison.offset), initial_state=_plain(comparison.initial_state),
+        samples=comparison.samples, estimated=comparison.estimated,
     )  # fmt: skip
 
 

@@ -368,6 +368,26 @@ class Model:
         """
         return _delegate(self._estimator.fit, t, u, y, **options)
 
+    def compare(self, fit, t, u, y):
+        """`fit.compare(t, u, y)` -> Comparison: a Fit of this model against a record it was
+        not fitted to, with that record's own initial state and output offset estimated by
+        least squares (a new record starts wherever the system was): fit_percent,
+        residual_rms, offset, initial_state, fitted, residuals.
+
+        >>> import mtt, numpy as np
+        >>> rlc = mtt.load(mtt.example("rlc"))
+        >>> t = np.linspace(0.0, 20.0, 2001)
+        >>> u = rlc.estimator().input_signal("prbs", t, period=0.5)
+        >>> y = rlc.simulate(t, u, hold="zoh")
+        >>> found = rlc.fit(t[:1001], u[:1001], y[:1001], hold="zoh", offset=False,
+        ...                 initial_state=False)  # the first 10 s, from rest
+        >>> later = slice(1000, None)  # the last 10 s, not at rest, 0.3 above
+        >>> compared = rlc.compare(found, t[later], u[later], y[later] + 0.3)
+        >>> round(compared.fit_percent, 1), round(compared.offset, 3), compared.estimated
+        (100.0, 0.3, 'its initial state and output offset estimated by least squares')
+        """
+        return _delegate(fit.compare, t, u, y)
+
 
 def _by_name(model: str, unknowns: tuple[str, ...], k: object) -> dict[str, object]:
     """k as the generated modules take it, as values by name: one unknown's value (also as a

@@ -16,11 +16,12 @@ import math
 import sys
 from collections.abc import Callable, Iterator, Mapping
 from concurrent.futures import Executor
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 from types import ModuleType
 
-from mtt.batch import run, worker
+from mtt.batch import run, validation, worker
+from mtt.batch.validation import Validation, plain
 from mtt.language.diagnostics import MttError
 
 CHUNK = 32  # records per chunk at most
@@ -39,6 +40,7 @@ class Outcome:
     result: object | None
     error: str | None
     seconds: float = 0.0
+    validation: tuple[Validation, ...] = ()
 
     @property
     def ok(self) -> bool:
@@ -49,22 +51,13 @@ class Outcome:
         result = None if self.error is not None else self.result
         return {
             "file": self.name,
-            "k": _plain(getattr(result, "k", None)),
-            "k_se": _plain(getattr(result, "k_se", None)),
-            "fit_percent": _plain(getattr(result, "fit_percent", None)),
+            "k": plain(getattr(result, "k", None)),
+            "k_se": plain(getattr(result, "k_se", None)),
+            "fit_percent": plain(getattr(result, "fit_percent", None)),
             "warnings": list(getattr(self.result, "warnings", ()) or ()),
             "error": self.error,
+            **({"validation": [v.record() for v in self.validation]} if self.validation else {}),
         }
-
-
-def _plain(value):
-    """A float for JSON (None for none or not finite), a list of them for an array."""
-    if value is None:
-        return None
-    if hasattr(value, "tolist") and getattr(value, "ndim", 0) > 0:
-        return [_plain(v) for v in value.tolist()]
-    value = float(value)
-    return value if math.isfinite(value) else None
 
 
 @dataclass(frozen=True)
@@ -75,6 +68,7 @@ class Batch:
 
     outcomes: tuple[Outcome, ...]
     pooled: object | None = None
+    validation: tuple[Validation, ...] = ()  # pooled: the pooled fit on the held-out records
 
     def __iter__(self) -> Iterator[Outcome]:
         return iter(self.outcomes)
@@ -262,7 +256,7 @@ def _each(found: Estimator, records, action: str, executor, jobs, columns, chunk
 
 def fit_many(model, records, *, executor=None, jobs: int | None = None, pooled: bool = False,
              columns=("t", "u", "y"), chunk_size: int | None = None,
-             progress: Progress | None = None, **fit_options) -> Batch:  # fmt: skip
+             progress: Progress | None = None, validate=(), **fit_options) -> Batch:  # fmt: skip
     """The generated module's `fit` on each record (or, pooled=True, one fit over them all).
 
     model: a Model (mtt.load), a model file, or a generated module (or its .py file).
@@ -278,13 +272,26 @@ def fit_many(model, records, *, executor=None, jobs: int | None = None, pooled: 
     one thread everywhere). pooled=True: the records' moments add into one estimate, each
     step computed by the workers where the records are (a record that cannot be read or is
     too short is an error and left out); the same as `fit` given them all as a list.
+
+    validate: held-out records (as `records`, read here): each fit (pooled: the pooled fit,
+    in `Batch.validation`) is compared with each of them by the module's `Fit.compare` (its
+    fit % and residual RMS with the held-out record's own initial state and offset
+    estimated), in each Outcome's `validation`.
     """
     found = estimator(model)
     _check_fit_options(found.module, fit_options)
+    held_out = validation.held_out(found.module, records_of(validate or ()), columns)
     if pooled:
-        return _pooled(found, records, executor, jobs, columns, chunk_size, progress, fit_options)
-    return _each(found, records, "fit", executor, jobs, columns, chunk_size, progress,
-                 fit_options)  # fmt: skip
+        batch = _pooled(found, records, executor, jobs, columns, chunk_size, progress,
+                        fit_options)  # fmt: skip
+        return replace(batch, validation=validation.compared(batch.pooled, held_out))
+    batch = _each(found, records, "fit", executor, jobs, columns, chunk_size, progress,
+                  fit_options)  # fmt: skip
+    if not held_out:
+        return batch
+    return replace(batch, outcomes=tuple(
+        replace(o, validation=validation.compared(o.result, held_out)) for o in batch.outcomes
+    ))  # fmt: skip
 
 
 def estimate_many(model, records, *, executor=None, jobs: int | None = None,

@@ -73,7 +73,8 @@ def cmd_fit_many(args, kind: str) -> int:
             batch = api.fit_many(
                 found, args.data, executor=client, jobs=None if client else (args.jobs or 1),
                 pooled=kind == "pooled", columns=records.columns(args.columns),
-                progress=lambda done, total: bar.update(done - bar.n), **options(module, args),
+                progress=lambda done, total: bar.update(done - bar.n),
+                validate=args.validate or (), **options(module, args),
             )  # fmt: skip
     except MttError as error:
         raise UsageError(str(error)) from None
@@ -136,7 +137,7 @@ def _named(outcome) -> str:
 
 
 def _pooled(module, args, batch, errors: list[str]) -> int:
-    from mtt.present.fits import fit_text
+    from mtt.present.fits import fit_text, validation_lines
 
     if errors:  # as in this process: a bad record is the error (named, also in --json)
         for error in errors[1:]:
@@ -147,13 +148,21 @@ def _pooled(module, args, batch, errors: list[str]) -> int:
         raise UsageError("no records to fit")
     result = batch.pooled
     warn("fit", result.warnings)
+    if args.validate and not batch.validation[0].comparison:
+        warn("fit", [f"no validation: {result.message}"])
     notes = [f"{outcome.name}" for outcome in batch]
     if args.json:
         record = {"model": module.MODEL, "unknown": module.UNKNOWN, **module.fit_record(result)}
         record["data"] = notes
+        if batch.validation:
+            record["validation"] = [v.record() for v in batch.validation]
         say(json.dumps(record))
     else:
-        say(fit_text(module, [argparse.Namespace(note=note) for note in notes], result))
+        lines = [fit_text(module, [argparse.Namespace(note=note) for note in notes], result)]
+        lines += validation_lines(
+            [(v.name, v.comparison) for v in batch.validation if v.comparison is not None]
+        )
+        say("\n".join(lines))
     return EXIT_OK if result.ok else EXIT_STOPPED
 
 
@@ -162,11 +171,16 @@ def _cells(module, outcome) -> tuple[str, ...]:
     import numpy as np
 
     result, count = outcome.result, len(module.UNKNOWNS)
+    held_out = [
+        "" if v.comparison is None else f"{v.comparison.fit_percent:.4g}"
+        for v in outcome.validation
+    ]
     if outcome.error is not None:
-        return (outcome.name, *[""] * (2 * count), "", "", "failed (the error is on stderr)")
+        return (outcome.name, *[""] * (2 * count), "", *held_out, "",
+                "failed (the error is on stderr)")  # fmt: skip
     pairs = zip(np.atleast_1d(result.k), np.atleast_1d(result.k_se), strict=True)
     estimates = (cell for k, se in pairs for cell in (f"{k:.6g}", f"{se:.3g}"))
-    return (outcome.name, *estimates, f"{result.fit_percent:.4g}",
+    return (outcome.name, *estimates, f"{result.fit_percent:.4g}", *held_out,
             str(len(result.warnings) or ""), "")  # fmt: skip
 
 
@@ -180,7 +194,8 @@ def _table(module, args, batch) -> str:
         estimates = (module.UNKNOWN, "k_se")
     else:
         estimates = tuple(part for name in module.UNKNOWNS for part in (name, f"{name} k_se"))
-    header = ("file", *estimates, "fit %", "warnings", "")
+    held_out = tuple(f"fit % on {v.name}" for v in (batch[0].validation if len(batch) else ()))
+    header = ("file", *estimates, "fit %", *held_out, "warnings", "")
     fitted = len(batch) - len(batch.errors)
     return "\n".join([
         f"{module.MODEL}: {len(batch)} records, one fit each ({method}, {where})",

@@ -46,8 +46,8 @@ def experiment_data(module: ModuleType, args, several: bool = False) -> list[Rec
             )
         names = records.columns(args.columns)
         return [records.read(module, path, names) for path in args.data]
-    if getattr(args, "columns", None):
-        raise UsageError("--columns names the columns of --data files")
+    if getattr(args, "columns", None) and not getattr(args, "validate", None):
+        raise UsageError("--columns names the columns of --data files (and of --validate files)")
     t, u, source = records.input_signal(
         module, args.signal, t_end=args.t_end, dt=args.dt, period=args.period,
         amplitude=args.amplitude, seed=args.seed,

@@ -300,5 +300,14 @@ def register(commands) -> None:
         help="write t, u, y, the fitted output and the residual (per record: the table)",
     )
     outputs.add_argument("--json", action="store_true", help="print the result as JSON")
+    fit.add_argument_group("validation").add_argument(
+        "--validate",
+        action="append",
+        type=given,
+        metavar="VAL.csv",
+        help="a record the fit did not use (CSV, the columns of --data): its fit %% and "
+        "residual RMS with its own initial state and output offset estimated, printed and in "
+        "--json and --plot beside the estimation figures (repeat for several)",
+    )
     _batch_options(fit)
     fit.set_defaults(run=_implementation("cmd_fit", "fitting"))

@@ -9,10 +9,14 @@ from __future__ import annotations
 
 import json
 import re
+from itertools import zip_longest
+
+import numpy as np
 
 from mtt.cli.experiment import experiment_data, module_for, signal_label
 from mtt.cli.fit_options import options
 from mtt.cli.running import EXIT_OK, EXIT_STOPPED, UsageError, say, warn
+from mtt.data.records import columns, read
 from mtt.estimator import codegen
 from mtt.present import fits, tables
 
@@ -25,6 +29,7 @@ def cmd_fit(args) -> int:
         return batch.cmd_fit_many(args, kind)
     module = module_for(args)
     records = experiment_data(module, args, several=True)
+    held_out = validation_data(module, args)  # read first: a wrong path fails before the fit
     arrays = [[getattr(data, name) for data in records] for name in ("t", "u", "y")]
     if len(records) == 1:
         arrays = [part[0] for part in arrays]
@@ -35,17 +40,22 @@ def cmd_fit(args) -> int:
             raise
         raise UsageError(_files_named(str(error), records)) from None
     warn("fit", result.warnings)
+    compared = validate(result, held_out)
     if args.plot and result.ok:
-        from mtt.present import plots  # matplotlib: a quarter second, paid by plotting only
+        from mtt.present import plots  # matplotlib takes a quarter second to import
 
         shown = [
             plots.Record(data.note, data.t, data.y, fitted)
             for data, fitted in zip(records, result.fitted, strict=True)
         ]
+        checked = [
+            plots.Record(fits.validation_label(data.note, c), data.t, data.y, c.fitted)
+            for data, c in zip(held_out, compared, strict=False)
+        ]
         plots.fit(
             args.plot, shown, output_label=signal_label(module, "output"), dpi=args.dpi,
             title=f"{module.MODEL}: {fits.estimates(module, result)}, "
-            f"fit {result.fit_percent:.4g} %",
+            f"fit {result.fit_percent:.4g} %", validation=checked,
         )  # fmt: skip
     elif args.plot:
         warn("fit", [f"no plot: {result.message}"])
@@ -61,10 +71,45 @@ def cmd_fit(args) -> int:
     if args.json:
         record = {"model": module.MODEL, "unknown": module.UNKNOWN, **module.fit_record(result)}
         record["data"] = [data.note for data in records]
+        if held_out:
+            record["validation"] = validation_records(module, held_out, compared)
         say(json.dumps(record))
     else:
-        say(fits.fit_text(module, records, result))
+        lines = [(data.note, c) for data, c in zip(held_out, compared, strict=False)]
+        say("\n".join([fits.fit_text(module, records, result), *fits.validation_lines(lines)]))
     return EXIT_OK if result.ok else EXIT_STOPPED
+
+
+def validation_data(module, args) -> list:
+    """The --validate records, read and checked as --data is."""
+    names = columns(args.columns)
+    return [read(module, path, names) for path in args.validate or ()]
+
+
+def validate(result, held_out: list) -> list:
+    """The fit compared with each held-out record (`Fit.compare`): none without a fitted
+    model (a warning says so)."""
+    if not held_out:
+        return []
+    if not np.all(np.isfinite(result.k)):
+        warn("fit", [f"no validation: {result.message}"])
+        return []
+    compared = []
+    for data in held_out:
+        try:
+            compared.append(result.compare(data.t, data.u, data.y))
+        except ValueError as error:
+            source = data.note.split(" samples from ", 1)[-1]
+            raise UsageError(f"--validate {source}: {error}") from None
+    return compared
+
+
+def validation_records(module, held_out: list, compared: list) -> list[dict]:
+    """--json's "validation": per held-out record, its figures (only "data" without a model)."""
+    return [
+        {"data": data.note, **(module.comparison_record(c) if c is not None else {})}
+        for data, c in zip_longest(held_out, compared)
+    ]
 
 
 def _files_named(message: str, records) -> str:

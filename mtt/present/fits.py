@@ -55,3 +55,17 @@ def fit_text(module, records, result) -> str:
     if any(result.offsets):
         lines.append("  output offset at rest: " + ", ".join(f"{v:.6g}" for v in result.offsets))
     return "\n".join(lines)
+
+
+def validation_lines(compared) -> list[str]:
+    """A line per held-out record, from (its name, the fit's Comparison on it)."""
+    return [
+        f"  validation on {name}: fit {c.fit_percent:.4g} %, residual RMS "
+        f"{c.residual_rms:.3g} ({c.estimated})"
+        for name, c in compared
+    ]
+
+
+def validation_label(name: str, comparison) -> str:
+    """A held-out record's title in the compare plot."""
+    return f"validation, fit {comparison.fit_percent:.4g} %: {name}"

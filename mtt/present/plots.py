@@ -182,17 +182,21 @@ class Record:
 
 
 def fit(path: str | Path, records: Sequence[Record], *, title: str, output_label: str,
-        dpi: float = 120.0) -> None:  # fmt: skip
+        dpi: float = 120.0, validation: Sequence[Record] = ()) -> None:  # fmt: skip
     """Measured and simulated output, and the residuals below, one column per record (at
-    most four): what the compare plots of system-identification toolboxes show."""
-    shown = records[:4]
+    most four, held-out `validation` records last, their model in green): what the compare
+    plots of system-identification toolboxes show."""
+    held = len(validation[: 4 - min(len(records), 2)])
+    shown = [*records[: 4 - held], *validation[:held]]
     figure = Figure(figsize=(min(4.0 + 3.0 * len(shown), 14.0), 5.6), layout="constrained")
     FigureCanvasAgg(figure)
     axes = figure.subplots(2, len(shown), sharex="col", squeeze=False, height_ratios=(3, 1))
     for column, record in enumerate(shown):
         top, bottom = axes[0, column], axes[1, column]
+        held_out = column >= len(shown) - held
         top.plot(record.t, record.y, color="tab:gray", linewidth=0.8, label="measured")
-        top.plot(record.t, record.fitted, color="tab:blue", linewidth=1.2, label="model")
+        top.plot(record.t, record.fitted, color="tab:green" if held_out else "tab:blue",
+                 linewidth=1.2, label="model")  # fmt: skip
         bottom.plot(record.t, record.y - record.fitted, color="tab:red", linewidth=0.6)
         bottom.axhline(0.0, color="black", linewidth=0.6)
         top.set_title(
@@ -204,6 +208,7 @@ def fit(path: str | Path, records: Sequence[Record], *, title: str, output_label
     axes[0, 0].set_ylabel("\n".join(textwrap.wrap(output_label, 30)))
     axes[1, 0].set_ylabel("residual")
     axes[0, 0].legend(loc="best", fontsize="small")
-    more = f" (the first 4 of {len(records)} records)" if len(records) > 4 else ""
+    left = len(records) + len(validation) - len(shown)
+    more = f" ({left} more records not shown)" if left else ""
     figure.suptitle("\n".join(textwrap.wrap(title + more, 90)), fontsize="medium")
     _save(figure, path, dpi)
