@@ -12,6 +12,7 @@ from types import MappingProxyType, ModuleType
 from mtt.api.results import Causality, StateSpace, Theta, TransferFunction, exact
 from mtt.derivation import pipeline
 from mtt.derivation import theta as derived
+from mtt.derivation.budget import DEFAULT_BUDGET, Budget
 from mtt.derivation.causality import assign
 from mtt.derivation.equations import Equations
 from mtt.derivation.identifiability import Identifiability, identifiability
@@ -73,6 +74,7 @@ def load(
     output: str | None = None,
     set: Mapping[str, object] | None = None,
     keep: str | Iterable[str] | None = None,
+    max_terms: int | None = None,
 ) -> Model:
     """Read and check a model: a file name (str or Path), or the model's text itself (a str
     with a line break). Raise `MttError` for anything wrong in it.
@@ -83,6 +85,8 @@ def load(
         `output` statements.
     set: values replacing the file's, {name: number or exact expression text}.
     keep: parameters kept symbolic instead of substituted (names, or "a,b").
+    max_terms: the most terms a polynomial of the derivation may have (default 20000);
+        beyond, deriving raises MttError too_large instead of growing without bound.
 
     >>> import mtt
     >>> model = mtt.load('''
@@ -104,12 +108,17 @@ def load(
         raise MttError(f"set takes a dict {{name: value}}, not {set!r}", kind="bad_value")
     overrides = {name: exact(name, value) for name, value in (set or {}).items()}
     chosen = _names("unknowns", unknowns)
+    if max_terms is not None and (
+        not isinstance(max_terms, int) or isinstance(max_terms, bool) or max_terms < 1
+    ):
+        raise MttError(f"max_terms takes a positive integer, not {max_terms!r}", kind="bad_value")
     choice = ParameterChoice(
         unknowns=chosen or None,
         keep=frozenset(_names("keep", keep)),
         overrides=MappingProxyType(overrides),
         input=_component("input", input),
         output=_component("output", output),
+        budget=DEFAULT_BUDGET if max_terms is None else Budget(max_terms),
     )
     source = _source(path_or_text)
     graph = build(parse(source), choice.selection)

@@ -111,6 +111,19 @@ def add_parameter_options(parser: argparse.ArgumentParser) -> None:
         dest="overrides",
         help="override a parameter's value (an exact expression, e.g. --set ra=1.5)",
     )
+    group.add_argument(
+        "--max-terms",
+        metavar="N",
+        type=_positive,
+        help="the most terms a polynomial of the derivation may have before it stops with "
+        "too_large (default 20000: symbolic results can grow exponentially)",
+    )
+
+
+def _positive(text: str) -> int:
+    if not text.isascii() or not text.isdigit() or int(text) < 1:
+        raise argparse.ArgumentTypeError(f"expected a positive whole number, not {text!r}")
+    return int(text)
 
 
 def _unknowns(args: argparse.Namespace) -> tuple[str, ...] | None:
@@ -124,8 +137,10 @@ def selection_from_args(args: argparse.Namespace) -> Selection:
 
 
 def choice_from_args(args: argparse.Namespace) -> ParameterChoice:
+    from mtt.derivation.budget import DEFAULT_BUDGET, Budget
     from mtt.derivation.parameters import ParameterChoice
 
+    terms = getattr(args, "max_terms", None)
     return ParameterChoice(
         unknowns=_unknowns(args),
         keep=frozenset(getattr(args, "keep", ())),  # commands with selection options only
@@ -133,6 +148,7 @@ def choice_from_args(args: argparse.Namespace) -> ParameterChoice:
         overrides=MappingProxyType(dict(getattr(args, "overrides", ()))),
         input=args.input,
         output=args.output,
+        budget=DEFAULT_BUDGET if terms is None else Budget(terms),
     )
 
 

@@ -13,7 +13,7 @@ unknown and the kept symbols.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from functools import cache
 
 import networkx as nx
@@ -21,6 +21,7 @@ import sympy
 from sympy.polys.domains.domain import Domain
 from sympy.polys.matrices import DomainMatrix
 
+from mtt.derivation.budget import DEFAULT_BUDGET, Budget
 from mtt.derivation.causality import CausalBondGraph
 from mtt.derivation.constants import Constants, Unsupported
 from mtt.derivation.parameters import Parametrisation
@@ -45,6 +46,7 @@ class Equations:
     B: DomainMatrix
     C: DomainMatrix
     D: DomainMatrix
+    budget: Budget = DEFAULT_BUDGET  # how large the transfer stage may let polynomials grow
 
     def matrices(self) -> dict[str, sympy.Matrix]:
         """E, A, B, C, D as exact sympy matrices."""
@@ -213,7 +215,9 @@ def _solve(
     return solved, free, constraints
 
 
-def derive(causal: CausalBondGraph, parametrisation: Parametrisation) -> Equations:
+def derive(
+    causal: CausalBondGraph, parametrisation: Parametrisation, budget: Budget = DEFAULT_BUDGET
+) -> Equations:
     """The causal equations and the descriptor form.
 
     Variables that the causal equations cannot give explicitly (a parameter of zero, a
@@ -243,7 +247,10 @@ def derive(causal: CausalBondGraph, parametrisation: Parametrisation) -> Equatio
     constraints = [_substitute(form, resolved, K) for form in constraints] + left
     relations = tuple((name, _to_expr(form, K)) for name, form in explicit.items())
     relations += tuple(("0", _to_expr(form, K)) for form in constraints)
-    return _descriptor(causal, parametrisation, K, storage, resolved, relations, extra, constraints)
+    equations = _descriptor(
+        causal, parametrisation, K, storage, resolved, relations, extra, constraints
+    )
+    return replace(equations, budget=budget)
 
 
 def _substitute(form: Form, resolved: dict[str, Form], K: Domain, skip=frozenset()) -> Form:

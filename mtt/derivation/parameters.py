@@ -14,6 +14,7 @@ from types import MappingProxyType
 
 import sympy
 
+from mtt.derivation.budget import DEFAULT_BUDGET, Budget
 from mtt.language.bondgraph import BondGraph, Selection, values_problems
 from mtt.language.diagnostics import Diagnostic, ModelError, error
 from mtt.language.expressions import ATOM, Measure
@@ -23,7 +24,8 @@ from mtt.language.measures import Problem, rational
 @dataclass(frozen=True)
 class ParameterChoice:
     """What the user chooses over the file: the unknowns (in order), the input and output,
-    which parameters stay symbolic, and which values are overridden.
+    which parameters stay symbolic, which values are overridden, and how large the
+    derivation may let its polynomials grow (`budget`).
 
     By default every parameter with a value in the file is substituted exactly and
     the others stay symbolic; the unknowns always stay symbolic.
@@ -35,6 +37,7 @@ class ParameterChoice:
     overrides: MappingProxyType = field(default_factory=lambda: MappingProxyType({}))
     input: str | None = None  # TYPE:NAME, over the file's `input` statement
     output: str | None = None
+    budget: Budget = DEFAULT_BUDGET
 
     @property
     def selection(self) -> Selection:

@@ -34,7 +34,7 @@ def equations_for(
     graph: BondGraph, choice: ParameterChoice = DEFAULT_CHOICE, identify: bool = False
 ) -> Equations:
     """Bond graph -> causal bond graph -> equations, with the parameters as chosen."""
-    return derive(causal_for(graph, identify), parametrise(graph, choice))
+    return derive(causal_for(graph, identify), parametrise(graph, choice), choice.budget)
 
 
 def transfer_for(path: str | Path, choice: ParameterChoice = DEFAULT_CHOICE) -> TransferFunction:

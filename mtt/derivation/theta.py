@@ -15,6 +15,7 @@ from collections.abc import Mapping
 from dataclasses import dataclass, field
 
 import sympy
+from sympy.polys.rings import PolyRing
 
 from mtt.derivation.transfer import TransferFunction
 from mtt.language.diagnostics import ModelError, Position, Source, error
@@ -138,18 +139,20 @@ def theta_matrix(tf: TransferFunction) -> Theta:
     params = equations.parametrisation
     p = len(params.unknowns)
     n, m = tf.degree("den"), tf.degree("num")
-    rows: list[dict[Monomial, sympy.Expr]] = [{} for _ in range(n + m + 2)]
-    rest = tf.gens[1 + p :]  # s and the unknowns come first
+    # each entry's terms first, then each entry made once (a sum built term by term costs
+    # time quadratic in its terms)
+    terms: list[dict[Monomial, dict]] = [{} for _ in range(n + m + 2)]
     for offset, poly, sign in ((0, tf.den, 1), (n + 1, tf.num, -1)):
-        for monom, coefficient in poly.terms():
+        for monom, coefficient in poly.iterterms():
             power_s, powers, others = monom[0], monom[1 : 1 + p], monom[1 + p :]
-            term = (
-                sign
-                * poly.ring.domain.to_sympy(coefficient)
-                * sympy.Mul(*(g**e for g, e in zip(rest, others, strict=True)))
-            )
-            row = rows[offset + power_s]
-            row[powers] = row.get(powers, sympy.Integer(0)) + term
+            entry = terms[offset + power_s].setdefault(powers, {})
+            entry[others] = coefficient if sign > 0 else -coefficient
+    rest = PolyRing(tf.gens[1 + p :] or (sympy.Dummy(),), tf.num.ring.domain)  # s, unknowns first
+    rows = [
+        {powers: rest.from_dict(entry if tf.gens[1 + p :] else {(0,): entry[()]}).as_expr()
+         for powers, entry in row.items()}
+        for row in terms
+    ]  # fmt: skip
     occurring = {monomial for row in rows for monomial in row}
     if p <= 1:  # every power up to the degree
         occurring = {(j,) * p for j in range(max(sum(mono) for mono in occurring) + 1)}

@@ -16,10 +16,11 @@ from math import gcd
 
 import sympy
 from sympy.polys.domains import ZZ
-from sympy.polys.matrices import DomainMatrix
 from sympy.polys.rings import PolyElement
 
 from mtt.derivation import constants
+from mtt.derivation.budget import Meter, TooLarge, refusal
+from mtt.derivation.elimination import bordered_ratio
 from mtt.derivation.equations import Equations
 from mtt.language.diagnostics import ModelError, error
 from mtt.language.measures import MAX_DIGITS
@@ -78,9 +79,18 @@ def transfer_function(equations: Equations) -> TransferFunction:
 
     G = det([[sE - A, B], [-C, D]]) / det(sE - A), both determinants exact by evaluation
     and interpolation (`determinants`); when that would need too many points (many kept
-    symbols), by a fraction-free solve over the polynomials instead.
+    symbols), by sparse fraction-free elimination over the polynomials (`elimination`),
+    within the equations' budget (`ModelError` too_large beyond it).
     """
-    from mtt.derivation.determinants import TooLarge, bordered_determinants  # numpy
+    try:
+        return _transfer_function(equations, Meter(equations.budget, "transfer function"))
+    except TooLarge as stop:
+        params = equations.parametrisation
+        raise refusal(equations.causal.bondgraph, params.free, stop) from None
+
+
+def _transfer_function(equations: Equations, meter: Meter) -> TransferFunction:
+    from mtt.derivation import determinants as evaluation  # numpy
 
     F, gens = _field(equations)
     lift = lambda M: M.to_sparse().convert_to(F)  # noqa: E731
@@ -99,25 +109,24 @@ def transfer_function(equations: Equations) -> TransferFunction:
         if algebraic:
             entries, scales, integers = constants.over_integers(entries, ring.ring)
         try:
-            determinants = bordered_determinants(entries, size + 1, integers)
-        except TooLarge as bits:
+            determinants = evaluation.bordered_determinants(entries, size + 1, integers)
+        except evaluation.TooLarge as bits:
             raise _too_large(equations, f"could have {int(bits.args[0] * 0.30103)}") from None
-        if determinants is None and algebraic:  # fraction-free, over the integers still
-            determinants = _bareiss(entries, size + 1, integers)
-        if determinants is None:
-            G = _solve(equations, F, pencil, lift(equations.B), lift(equations.C)) + D
-            num, den = G.numer, G.denom
+        if determinants is None:  # fraction-free, over the integers still
+            num, den = _eliminated(entries, size + 1, integers, algebraic and ring.ring, meter)
         else:
-            leading, full = determinants
-            if algebraic:
-                leading, full = (constants.reduced(p, ring.ring) for p in (leading, full))
-            if not leading:
-                raise _singular(equations, ": det(sE - A) is identically zero")
-            # the last row's multipliers (the others' cancel between the two determinants)
-            last = F.convert(denominators.to_dok()[size, size]).numer * scales.get(size, 1)
-            num, den = full, leading * last
-            common = num.gcd(den)  # one gcd, in the ring (fractions would take several)
-            num, den = num.exquo(common), den.exquo(common)
+            num, den = determinants[1], determinants[0]
+        if algebraic:
+            num, den = (constants.reduced(p, ring.ring) for p in (num, den))
+        if not den:
+            raise _singular(equations, ": det(sE - A) is identically zero")
+        # the last row's multipliers (the others' cancel between the two determinants)
+        last = F.convert(denominators.to_dok()[size, size]).numer * scales.get(size, 1)
+        den = meter.multiply(den, last)
+        meter.spend(len(num) * len(den))
+        # one gcd, in the ring (fractions would take several), with its cofactors (sympy's
+        # division takes time quadratic in the terms)
+        _, num, den = num.cofactors(den)
     tf = _canonical(equations, gens, num, den)
     digits = max((_digits(x) for p in (tf.num, tf.den) for x in _rationals((p,))), default=0)
     if digits > MAX_DIGITS:
@@ -150,27 +159,18 @@ def _too_large(equations: Equations, have: str) -> ModelError:
     return ModelError(equations.causal.bondgraph.source, [error("too_large", message, where)])
 
 
-def _bareiss(entries: dict, size: int, ring):
-    """Both determinants (of the leading block and of the whole) by sympy's fraction-free
-    elimination over the polynomial ring (used where evaluation would take too many points)."""
-    rows: dict = {}
-    for (i, j), value in entries.items():
-        rows.setdefault(i, {})[j] = value
-    whole = DomainMatrix(rows, (size, size), ring.to_domain())
-    return whole[: size - 1, : size - 1].det(), whole.det()
-
-
-def _solve(equations: Equations, F, pencil, B, C):
-    """C (sE - A)^-1 B by a fraction-free solve over the polynomials in s and the symbols."""
-    size = len(equations.states)
-    _, cleared = pencil.hstack(B).clear_denoms_rowwise(convert=True)
-    M, B = cleared[:, :size], cleared[:, size:]
-    if M.rank() < size:
-        raise _singular(equations, ": det(sE - A) is identically zero")
-    xnum, den = M.solve_den(B)
-    x = xnum.convert_to(F)
-    CX = sum((C[0, j].element * x[j, 0].element for j in range(size)), F.zero)
-    return CX / F.convert_from(den, M.domain)
+def _eliminated(entries: dict, size: int, ring, algebraic, meter: Meter):
+    """det(whole) and det(leading block), both divided by the factors of the latter that
+    cancel, by sparse fraction-free elimination; det(leading block) is zero for a singular
+    model (over Q(theta), `algebraic` the ring over it: when a factor vanishes there)."""
+    ratio = bordered_ratio(entries, size, ring, meter)
+    factors = () if ratio is None else (*ratio.den, *ratio.other)
+    if ratio is None or algebraic and not all(constants.reduced(f, algebraic) for f in factors):
+        return ring.zero, ring.zero
+    den = ring.one
+    for factor in sorted(ratio.den, key=len):
+        den = meter.multiply(den, factor)
+    return ratio.num, den
 
 
 def _rationals(polys) -> list[Fraction]:
