@@ -129,7 +129,7 @@ def test_causality_strokes():
 def test_latex_display():
     model = mtt.load(RC)
     assert model.transfer_function._repr_latex_() == (
-        "$\\displaystyle G(s) = \\frac{1}{1000 c s + 1}$"
+        "$\\displaystyle G(s) = \\frac{1}{1000\\,c\\,s + 1}$"
     )
     assert model.theta._repr_latex_() == (
         "$\\displaystyle \\Theta = \\left[\\begin{matrix}1 & 0\\\\0 & 1000\\\\-1 & 0"
@@ -316,3 +316,68 @@ def test_a_value_that_lowers_a_degree_gives_the_shorter_polynomials(dc_drive, re
     assert (num.tolist(), den.tolist()) == ([10.0], [1.0, 10.0, 10.0])
     dc_drive.to_scipy(0)
     assert not [w for w in recwarn if "coefficients" in str(w.message)]  # scipy's BadCoefficients
+
+
+KEPT_K = (  # the unknown is c; a known parameter is called k (kept symbolic)
+    "model rck\nparam r = 1000\nparam k = 2\nunknown c = 1e-6\nSe:v -> 1:loop\n"
+    "1:loop -> R:r\n1:loop -> 0:out\n0:out -> C:c\n0:out -> R:k\n0:out -> De:vc\n"
+)
+
+
+def test_the_unknown_s_value_never_lands_on_a_parameter_of_the_same_name():
+    model = mtt.load(KEPT_K, keep="k")
+    tf = model.transfer_function
+    by_name, positional = tf.at(c=1e-3, k=5), tf.at(1e-3, k=5)
+    assert all(np.array_equal(a, b) for a, b in zip(by_name, positional, strict=True))
+    # k= is the parameter k, never the unknown: c keeps the file's value
+    expected = signal.TransferFunction(*tf.at(c=1e-6, k=10))
+    assert np.allclose(model.to_scipy(k=10).den, expected.den)
+    assert not np.allclose(model.to_scipy(10).den, expected.den)
+    assert "c is given twice" in str(kind_of(model.to_scipy, 1e-3, c=1e-3))
+
+
+def test_discrete_time_and_state_space_exports_agree_with_the_transfer_function():
+    rlc = mtt.load(mtt.example("rlc"))  # G(s) = 2cs / (cs^2 + 4cs + 2)
+    G = rlc.to_scipy(0.1)
+    for method in ("zoh", "foh"):
+        sampled = rlc.to_scipy(0.1, dt=0.05, method=method)
+        reference = signal.cont2discrete((G.num, G.den), 0.05, method=method)
+        assert sampled.dt == 0.05
+        np.testing.assert_allclose(sampled.num, np.trim_zeros(np.ravel(reference[0]), "f"))
+        np.testing.assert_allclose(sampled.den, reference[1], atol=1e-12)
+    A, B, C, D = rlc.state_space.at(0.1)
+    s = 0.7j
+    response = (C @ np.linalg.solve(s * np.eye(2) - A, B) + D).item()
+    np.testing.assert_allclose(response, np.polyval(G.num, s) / np.polyval(G.den, s))
+    assert kind_of(rlc.to_scipy, 0.1, dt=-1).kind == "bad_value"
+    assert "method must be one of" in str(kind_of(rlc.to_scipy, 0.1, dt=1, method="tustin"))
+
+
+def test_python_control_gets_mtt_s_names_in_either_form():
+    control = pytest.importorskip("control")
+    rlc = mtt.load(mtt.example("rlc"))
+    tf, ss = rlc.to_control(0.1), rlc.to_control(0.1, form="ss")
+    assert (tf.name, tf.input_labels, tf.output_labels) == ("rlc", ["Se:v"], ["Df:i"])
+    assert ss.state_labels == ["p_l", "q_c"] and ss.input_labels == ["Se:v"]
+    w = np.array([0.3, 3.0])
+    np.testing.assert_allclose(ss(1j * w), tf(1j * w))
+    sampled = rlc.to_control(0.1, form="ss", dt=0.05)
+    assert sampled.dt == 0.05 and isinstance(sampled, control.StateSpace)
+    assert kind_of(rlc.to_control, 0.1, form="zpk").kind == "bad_argument"
+
+
+def test_an_option_named_like_a_parameter_is_refused_as_ambiguous():
+    model = mtt.load(KEPT_K.replace("param k = 2", "param dt = 2").replace("R:k", "R:dt"),
+                     keep="dt")  # fmt: skip
+    assert "dt= is ambiguous" in str(kind_of(model.to_scipy, 1e-6, dt=0.1))
+    sampled = model.to_scipy({"c": 1e-6, "dt": 3}, dt=0.1)  # the parameter in the dict
+    assert sampled.dt == 0.1
+
+
+def test_latex_spaces_its_factors_and_sets_long_names_as_one_symbol():
+    model = mtt.load(
+        "model m\nparam b = 1\nunknown mass = 2\nSe:f -> 1:j\n1:j -> I:mass\n1:j -> R:b\n"
+        "1:j -> Df:v\n"
+    )
+    latex = model.transfer_function._repr_latex_()
+    assert "\\mathit{mass}\\,s" in latex and "mass s" not in latex

@@ -169,7 +169,7 @@ def test_tf_json(capsys, args, num, den, symbols):
 def test_tf_latex(capsys):
     status, out, _ = run(capsys, "tf", MODELS / "rlc.bg", "--symbolic", "--latex")
     assert status == EXIT_OK
-    assert out.strip().startswith("G(s) = \\frac{c s}{")
+    assert out.strip().startswith("G(s) = \\frac{c\\,s}{")
 
 
 def test_theta_latex(capsys):

@@ -9,7 +9,9 @@ from functools import cached_property
 from pathlib import Path
 from types import MappingProxyType, ModuleType
 
-from mtt.api.results import Causality, StateSpace, Theta, TransferFunction, exact
+from mtt.api import systems
+from mtt.api.exact import exact
+from mtt.api.results import Causality, StateSpace, Theta, TransferFunction
 from mtt.derivation import pipeline
 from mtt.derivation import theta as derived
 from mtt.derivation.budget import DEFAULT_BUDGET, Budget
@@ -244,10 +246,14 @@ class Model:
         """
         return identifiability(self._checked_theta())
 
-    def to_scipy(self, k: object = None, **known: object):
-        """scipy.signal.TransferFunction at unknown = k (default: the file's value). With
-        several unknowns k is a sequence in the order of `unknowns`, or a dict by name;
-        any name (an unknown, a kept parameter) may also be given by keyword.
+    def to_scipy(
+        self, k: object = None, /, *, dt: float | None = None, method: str = "zoh", **known
+    ):
+        """scipy.signal.TransferFunction at the unknowns' value k (default: the file's): a
+        number, or for several a sequence in the order of `unknowns` or a dict by name; any
+        free name (an unknown, a kept parameter) may also be given by keyword. With dt, the
+        discrete-time system sampled every dt through a hold: method "zoh" (default),
+        "foh", "bilinear" or "impulse".
 
         >>> import mtt
         >>> G = mtt.load(mtt.example("dc_drive")).to_scipy(10)
@@ -256,42 +262,36 @@ class Model:
         >>> motor = mtt.load(mtt.example("dc_motor"))  # unknowns ra, jl
         >>> motor.to_scipy([1, 10]).den.tolist() == motor.to_scipy(ra=1, jl=10).den.tolist()
         True
+        >>> mtt.load(mtt.example("rlc")).to_scipy(0.1, dt=0.01).dt
+        0.01
         """
-        import scipy.signal
+        return systems.to_scipy(self, k, known, dt, method)
 
-        return scipy.signal.TransferFunction(*self._coefficients(k, known))
-
-    def to_control(self, k: object = None, **known: object):
-        """python-control's TransferFunction at unknown = k, given as to `to_scipy`
-        (pip install -e '.[control]' in mtt's clone).
+    def to_control(
+        self,
+        k: object = None,
+        /,
+        *,
+        form: str = "tf",
+        dt: float | None = None,
+        method: str = "zoh",
+        **known,
+    ):
+        """python-control's system at the unknowns' value k, given as to `to_scipy`: a
+        transfer function (form "tf") or the state space of the bond graph's energy
+        variables (form "ss"), named as the model, its input and output (and states);
+        with dt, sampled as by `to_scipy` (pip install -e '.[control]' in mtt's clone).
 
         >>> import mtt
         >>> G = mtt.load(mtt.example("dc_drive")).to_control(10)
         >>> G.num[0][0].tolist(), G.den[0][0].tolist()
         ([100.0, 0.0, 10.0], [10.0, 100.0, 111.0, 110.0, 10.0])
-        >>> float(G.dcgain())
-        1.0
+        >>> float(G.dcgain()), G.name, G.input_labels, G.output_labels
+        (1.0, 'dc_drive', ['Se:v'], ['Df:vm'])
+        >>> mtt.load(mtt.example("rlc")).to_control(0.1, form="ss").state_labels
+        ['p_l', 'q_c']
         """
-        try:
-            import control
-        except ImportError:
-            raise MttError(
-                "to_control needs python-control: pip install -e '.[control]' in mtt's clone",
-                kind="missing_dependency",
-            ) from None
-        return control.tf(*self._coefficients(k, known))
-
-    def _coefficients(self, k: object, known: dict):
-        """k as the generated modules take it: a number (one unknown), a sequence or array
-        in the order of `unknowns` (fit(...).k), or a dict by name."""
-        values = dict(known)
-        if k is not None:
-            given = _by_name(self.name, self.unknowns, k)
-            both = sorted(values.keys() & given.keys())
-            if both:
-                raise MttError(f"{both[0]} is given twice: in k and by name", kind="bad_argument")
-            values.update(given)
-        return self.transfer_function.at(**values)
+        return systems.to_control(self, k, known, form, dt, method)
 
     def compile(self, path: str | Path) -> Path:
         """Write the standalone estimator module (numpy and scipy only) to `path`, or to
@@ -396,24 +396,6 @@ class Model:
         (100.0, 0.3, 'its initial state and output offset estimated by least squares')
         """
         return _delegate(fit.compare, t, u, y)
-
-
-def _by_name(model: str, unknowns: tuple[str, ...], k: object) -> dict[str, object]:
-    """k as the generated modules take it, as values by name: one unknown's value (also as a
-    vector of length 1), or a sequence in the order of the unknowns, or a dict by name."""
-    if isinstance(k, Mapping):
-        return dict(k)
-    if len(unknowns) == 1:  # a number, or a vector of length 1 (a fit's k) as one
-        vector = not isinstance(k, str) and hasattr(k, "__len__") and len(k) == 1
-        return {unknowns[0]: next(iter(k.ravel() if hasattr(k, "ravel") else k)) if vector else k}
-    if isinstance(k, str) or not hasattr(k, "__len__") or len(k) != len(unknowns):
-        raise MttError(
-            f"{model} has {len(unknowns)} unknowns ({', '.join(unknowns)}): give k as a "
-            f"sequence of {len(unknowns)} values in that order, a dict by name, or each by "
-            f"keyword, not {k!r}",
-            kind="bad_argument",
-        )
-    return dict(zip(unknowns, k, strict=True))
 
 
 def _delegate(function, *args, **options):

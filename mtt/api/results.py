@@ -7,15 +7,14 @@ forms exist once, there.
 
 from __future__ import annotations
 
-import math
-from collections.abc import Mapping
 from dataclasses import dataclass
-from fractions import Fraction
 from functools import cached_property
 
 import numpy as np
 import sympy
 
+from mtt.api import values
+from mtt.api.exact import numeric
 from mtt.derivation import theta as derived
 from mtt.derivation.causality import CausalBondGraph, describe
 from mtt.derivation.equations import Equations
@@ -24,80 +23,8 @@ from mtt.language.diagnostics import MttError
 from mtt.present import report
 
 
-def exact(name: str, value: object) -> sympy.Expr:
-    """A parameter value as an exact number: a float is read as the decimal it prints as
-    (0.1 is 1/10, as if written in a model file); a str is an expression of numbers."""
-    if isinstance(value, bool):
-        raise MttError(f"{name} = {value!r}: expected a number", kind="bad_value")
-    if isinstance(value, str):
-        from mtt.language.parse import parse_expression
-
-        return parse_expression(value, variables=frozenset())
-    if isinstance(value, float | np.floating):
-        if not math.isfinite(value):
-            raise MttError(f"{name} = {value}: every value must be finite", kind="bad_value")
-        return sympy.Rational(repr(float(value)))
-    if isinstance(value, int | np.integer | Fraction):
-        return sympy.Rational(value)
-    if isinstance(value, sympy.Expr) and value.is_number and value.is_finite:
-        return value
-    raise MttError(f"{name} = {value!r}: expected a number", kind="bad_value")
-
-
-def _numeric(expr: sympy.Expr, what: str) -> float:
-    try:
-        number = float(expr)
-    except OverflowError:
-        raise MttError(f"{what} is too large for a float: {expr}", kind="out_of_range") from None
-    except TypeError:  # complex, or a symbol left
-        raise MttError(f"{what} is not a real number: {expr}", kind="bad_value") from None
-    if not math.isfinite(number):
-        raise MttError(f"{what} is too large for a float", kind="out_of_range")
-    return number
-
-
 def _leading_zeros_dropped(coefficients: np.ndarray) -> np.ndarray:
     return np.trim_zeros(coefficients, "f") if coefficients.any() else coefficients[-1:]
-
-
-@dataclass(frozen=True)
-class _Values:
-    """Values for the free names of a result: the unknowns and the known parameters kept
-    symbolic. A name not given takes the model file's value; a substituted parameter
-    cannot be given (it is no longer in the result)."""
-
-    theta: derived.Theta
-
-    @property
-    def free(self) -> tuple[str, ...]:
-        return self.theta.unknowns + self.theta.symbols
-
-    def substitution(self, given: Mapping[str, object]) -> dict[sympy.Symbol, sympy.Expr]:
-        theta = self.theta
-        for name in given:
-            if name in theta.assumed:
-                raise MttError(
-                    f"{name} is known and substituted (= {theta.assumed[name]}): load the model "
-                    f"with keep=[{name!r}] to vary it, or set={{{name!r}: ...}}",
-                    kind="substituted_parameter",
-                )
-            if name not in self.free:
-                raise MttError(
-                    f"{name!r} is not a parameter of {theta.model} "
-                    f"(free: {', '.join(self.free) or 'none'})",
-                    kind="undeclared_parameter",
-                )
-        defaults = {**theta.defaults, **theta.true_values}
-        values = {}
-        for name in self.free:
-            value = exact(name, given[name]) if name in given else defaults[name]
-            if value is None:
-                raise MttError(
-                    f"{theta.model} gives no value for {name}: pass {name}=VALUE",
-                    kind="missing_value",
-                )
-            values[sympy.Symbol(name)] = value
-        return values
 
 
 @dataclass(frozen=True)
@@ -154,17 +81,26 @@ class TransferFunction:
     def _coefficients(self) -> tuple[list[sympy.Expr], list[sympy.Expr]]:
         return tuple(sympy.Poly(p, LAPLACE).all_coeffs() for p in (self.num, self.den))
 
-    def at(self, **values: object) -> tuple[np.ndarray, np.ndarray]:
-        """(num, den) as float arrays, highest power of s first (scipy.signal's order), for
-        the values given; a name not given takes the model file's value. A value that
-        lowers a degree (k = 0, say) gives the shorter array, without leading zeros."""
-        substitution = _Values(self.theta).substitution(values)
+    def at(self, k: object = None, /, **named: object) -> tuple[np.ndarray, np.ndarray]:
+        """(num, den) as float arrays, highest power of s first (scipy.signal's order), at
+        the unknowns' value k (a number; for several a sequence in the order of `unknowns`
+        or a dict) and the parameters named; a name not given takes the model file's value.
+        A value that lowers a degree (k = 0, say) gives the shorter array, without leading
+        zeros.
+
+        >>> import mtt
+        >>> tf = mtt.load(mtt.example("rlc")).transfer_function  # 2cs / (cs^2 + 4cs + 2)
+        >>> [part.tolist() for part in tf.at(0.5)] == [part.tolist() for part in tf.at(c=0.5)]
+        True
+        """
+        substitution = values.substitution(self.theta, self.theta.model, k, named)
         num, den = (
-            np.array([_numeric(c.xreplace(substitution), f"a coefficient of {part}") for c in p])
+            np.array([numeric(c.xreplace(substitution), f"a coefficient of {part}") for c in p])
             for part, p in zip(("num", "den"), self._coefficients, strict=True)
         )
         if not den.any():
-            raise MttError(f"the denominator of G(s) is zero at {values}", kind="singular_model")
+            at = ", ".join(f"{symbol} = {value}" for symbol, value in substitution.items())
+            raise MttError(f"the denominator of G(s) is zero at {at}", kind="singular_model")
         return _leading_zeros_dropped(num), _leading_zeros_dropped(den)
 
     def __str__(self) -> str:
@@ -235,9 +171,9 @@ class Theta:
                     kind="bad_value",
                 )
             given[name] = 0  # a placeholder, never used: no entry depends on it
-        substitution = _Values(self.theta).substitution(given)
+        substitution = values.substitution(self.theta, self.theta.model, None, given)
         return np.array(
-            [[_numeric(e.xreplace(substitution), "an entry of Theta") for e in row]
+            [[numeric(e.xreplace(substitution), "an entry of Theta") for e in row]
              for row in self.matrix.tolist()]
         )  # fmt: skip
 
@@ -249,7 +185,7 @@ class Theta:
         return f"Theta({rows}x{columns}, monomials {self.monomials})"
 
     def _repr_latex_(self) -> str:
-        K = sympy.latex(sympy.Matrix([self.monomials]))
+        K = report.latex(sympy.Matrix([self.monomials]))
         return f"$\\displaystyle {report.theta_latex(self.theta)}, \\quad K^T = {K}$"
 
 
@@ -284,6 +220,33 @@ class StateSpace:
     C = property(lambda self: self._matrices["C"])
     D = property(lambda self: self._matrices["D"])
 
+    def at(self, k: object = None, /, **named: object) -> tuple[np.ndarray, ...]:
+        """(A, B, C, D) as floats of x' = A x + B u, y = C x + D u, at the values given as
+        to `TransferFunction.at` (E solved: it must be invertible there), the states in the
+        order of `states`.
+
+        >>> import mtt
+        >>> A, B, C, D = mtt.load(mtt.example("rlc")).state_space.at(0.1)
+        >>> A.tolist(), B.ravel().tolist(), C.ravel().tolist(), D.ravel().tolist()
+        ([[-4.0, -10.0], [2.0, 0.0]], [1.0, 0.0], [2.0, 0.0], [0.0])
+        """
+        model = self.equations.causal.bondgraph.name
+        substitution = values.substitution(self.equations.parametrisation, model, k, named)
+        E, A, B, C, D = (
+            np.array(
+                [numeric(entry.xreplace(substitution), f"an entry of {name}") for entry in matrix],
+                dtype=float,
+            ).reshape(matrix.shape)
+            for name, matrix in self._matrices.items()
+        )
+        try:
+            return np.linalg.solve(E, A), np.linalg.solve(E, B), C, D
+        except np.linalg.LinAlgError:
+            raise MttError(
+                f"E of {model}'s descriptor form is singular at these values: no x' = A x + B u",
+                kind="singular_model",
+            ) from None
+
     @property
     def relations(self) -> tuple[tuple[str, sympy.Expr], ...]:
         """The causal equations, variable = expression (bond variables e1, f1, ...)."""
@@ -297,7 +260,7 @@ class StateSpace:
 
     def _repr_latex_(self) -> str:
         body = ",\\quad ".join(
-            f"{name} = {sympy.latex(matrix)}" for name, matrix in self._matrices.items()
+            f"{name} = {report.latex(matrix)}" for name, matrix in self._matrices.items()
         )
         return f"$\\displaystyle {body}$"
 

@@ -74,9 +74,20 @@ def _grouped(expression: sympy.Expr) -> str:
     return f"({expression})" if isinstance(expression, sympy.Add) else str(expression)
 
 
+def latex(expression: sympy.Basic) -> str:
+    """sympy's LaTeX with a thin space between factors and each multi-letter name set as one
+    symbol (\\mathit{mass}): math mode drops spaces, and 5 mass s^2 read as 5masss^2."""
+    names = {
+        symbol: rf"\mathit{{{symbol.name}}}"
+        for symbol in expression.free_symbols
+        if len(symbol.name) > 1 and sympy.latex(symbol) == symbol.name
+    }
+    return sympy.latex(expression, mul_symbol=r"\,", symbol_names=names)
+
+
 def tf_latex(theta: Theta) -> str:
     num, den = (sympy.collect(sympy.expand(p), LAPLACE) for p in (theta.num, theta.den))
-    return f"G(s) = \\frac{{{sympy.latex(num)}}}{{{sympy.latex(den)}}}"
+    return f"G(s) = \\frac{{{latex(num)}}}{{{latex(den)}}}"
 
 
 def theta_text(theta: Theta) -> str:
@@ -109,7 +120,7 @@ def _degrees(theta: Theta) -> str:
 
 
 def theta_latex(theta: Theta) -> str:
-    return f"\\Theta = {sympy.latex(theta.matrix)}"
+    return f"\\Theta = {latex(theta.matrix)}"
 
 
 def derived_json(theta: Theta, order: int) -> dict:
@@ -238,6 +249,4 @@ def ss_json(equations: Equations) -> dict:
 
 
 def ss_latex(equations: Equations) -> str:
-    return "\n".join(
-        f"{name} = {sympy.latex(matrix)}" for name, matrix in equations.matrices().items()
-    )
+    return "\n".join(f"{name} = {latex(matrix)}" for name, matrix in equations.matrices().items())
