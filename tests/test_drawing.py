@@ -270,3 +270,24 @@ def test_a_causal_conflict_inside_a_part_is_found_by_check(tmp_path, capsys):
     part.write_text("model clash\nSS:in -> 0:n\nSe:a -> 0:n\nSe:b -> 0:n\n0:n -> R:r(1)\n")
     assert main(["check", str(part)]) == 2
     assert "error[causal_conflict]" in capsys.readouterr().err
+
+
+def test_a_bond_within_a_layer_is_moved_on_and_bonds_fan_out(tmp_path):
+    # 1:b is one bond from 0:a directly and two through GY:g: laid out by distance alone,
+    # GY:g and 1:b shared a layer and their bond ran through what hangs on 1:b
+    model = tmp_path / "triangle.bg"
+    model.write_text(
+        "model triangle\nSe:u -> 0:a\n0:a -> 1:b\n0:a -> GY:g(2) -> 1:b\n"
+        "1:b -> R:r(1)\n1:b -> C:c(1)\nMSe:m(2*e(a)) -> 1:b\n1:b -> Df:y\n"
+    )
+    graph = load(model)
+    picture = drawing.picture(graph, assign(graph))
+    assert problems(picture) == []
+    x = {name: label.centre[0] for name, label in picture.labels.items()}
+    assert x["u"] < x["a"] < x["g"] < x["b"] < x["y"]  # the two-port in the chain
+    direct = next(
+        b
+        for b in picture.bonds
+        if {graph.bond(b.number).tail, graph.bond(b.number).head} == {"a", "b"}
+    )
+    assert len(direct.path) == 3  # it passes GY's layer with a bend

@@ -52,7 +52,12 @@ GAP = 0.05  # between a label's box and the bonds that end at it
 PARALLEL = 0.12  # between bonds that join the same two components
 MARGIN = 0.15  # around the picture
 MAX_INCHES = 60.0  # a side of the figure: larger pictures are drawn smaller, fonts and all
-VARIANTS = (Variant(), Variant(flip=True), Variant(spacing=1.7), Variant(spacing=1.7, flip=True))
+VARIANTS = tuple(
+    Variant(spacing, flip, turn)
+    for spacing in (1.0, 1.7)
+    for turn in (False, True)
+    for flip in (False, True)
+)
 BENDS = (0.0, 0.3, -0.3, 0.6, -0.6, 1.0, -1.0)  # a signal's curvature, tried in turn
 INK, NUMBER_INK, SIGNAL_INK, BOX_FILL = "#1a1a1a", "#7a7a7a", "#b04a1a", "#f3f3f3"
 ROLE_INK = {Role.SOURCE: "#1f5fa8", Role.DETECTOR: "#1f5fa8", Role.PORT: NUMBER_INK}

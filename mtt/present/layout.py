@@ -36,6 +36,7 @@ RISE = 0.32  # ... and of a bond to an element hung on its junction
 VGAP = 0.26  # between the blocks of one layer
 BOX_PAD, BOX_TITLE = 0.07, 0.17  # a subsystem's box around its labels; the strip for its name
 BEND = 0.06  # how far labels keep from a bond that passes their layer
+FAN = 0.16  # two bonds that leave one label part by this much where their strokes are
 SWEEPS = 8  # barycentre sweeps (each down and up) while crossings remain
 HUNG = {Role.RESISTOR, Role.STORAGE, Role.MODULATED}
 # the tilts from the vertical of 1, 2, 3... elements hung on one side of a junction
@@ -48,6 +49,7 @@ class Variant:
 
     spacing: float = 1.0  # scales the gaps between layers and between blocks
     flip: bool = False  # hang the first element on the other side
+    turn: bool = False  # turn hung elements away from the junction's other bonds
 
 
 def owner(graph: BondGraph, name: str) -> str:
@@ -91,21 +93,27 @@ def layout(graph: BondGraph, half: dict[str, np.ndarray], variant: Variant = Var
     routes = _route(spine, layer, chains)
     half = {**half, **{d: np.array([0.0, BEND]) for via in routes.values() for d in via}}
     columns = _order(spine, layer, chains)
-    offsets: dict[str, dict[str, np.ndarray]] = {}
-    for column in columns:
-        for i, name in enumerate(column):
-            elements = [h for h, j in hung.items() if j == name]
-            up_first = (i <= (len(column) - 1) / 2) != variant.flip
-            offsets[name] = _hang(name, elements, half, up_first)
-    extent = {name: _extent(name, offsets[name], half) for column in columns for name in column}
-    x = _abscissae(columns, extent, chains, variant.spacing)
-    y = _ordinates(spine, columns, extent, chains, variant.spacing)
-    position = {}
-    for c, column in enumerate(columns):
-        for name in column:
-            position[name] = np.array([x[c], y[name]])
-            for element, offset in offsets[name].items():
-                position[element] = position[name] + offset
+    x = None
+    away: dict[str, list[float]] = {}  # a junction's spine bonds' angles, once known
+    for _ in range(1 + variant.turn):  # hang, place; then hang clear of the bonds, again
+        offsets: dict[str, dict[str, np.ndarray]] = {}
+        for column in columns:
+            for i, name in enumerate(column):
+                elements = [h for h, j in hung.items() if j == name]
+                up_first = (i <= (len(column) - 1) / 2) != variant.flip
+                offsets[name] = _hang(name, elements, half, up_first, away.get(name, []))
+        extent = {n: _extent(n, offsets[n], half) for column in columns for n in column}
+        x = _abscissae(columns, extent, chains, variant.spacing)
+        fans = _fans(spine, columns, x, half, variant.spacing)
+        y = _ordinates(spine, columns, extent, chains, variant.spacing, fans)
+        position = {n: np.array([x[c], y[n]]) for c, column in enumerate(columns) for n in column}
+        away = {
+            n: [np.degrees(np.arctan2(*(position[m] - position[n])[::-1])) for m in spine[n]]
+            for n in position
+        }
+    for name, placed in offsets.items():
+        for element, offset in placed.items():
+            position[element] = position[name] + offset
     bends = {}
     for (a, b), via in routes.items():
         bends[(a, b)] = np.array([position[d] for d in via])
@@ -155,9 +163,31 @@ def _layers(graph: BondGraph, spine: nx.Graph) -> dict[str, int]:
             else:  # a source bonded to a detector, alone
                 layer[end] = int(end not in sources)
         if not again:
+            two_ports = {n for n in core if role[n] is Role.TWO_PORT}
+            _unflat(core, layer, two_ports)
             _apart(graph, layer)
+            _unflat(core, layer, two_ports)
     low = min(layer.values())
     return {n: d - low for n, d in layer.items()}
+
+
+def _unflat(core: nx.Graph, layer: dict[str, int], two_ports: set) -> None:
+    """No bond within a layer (it would run through the layer): one of its ends moves a
+    layer on, the one whose move makes the fewest bonds pass a layer (then not a two-port,
+    which stays between its two bonds; then the busier one, then the later in model
+    order), until none is left."""
+    order = {n: i for i, n in enumerate(core)}
+    for _ in range(len(order) ** 2):
+        flat = [(a, b) for a, b in core.edges() if layer[a] == layer[b]]
+        if not flat:
+            return
+
+        def cost(name: str) -> tuple:
+            passing = sum(layer[m] == layer[name] - 1 for m in core[name])
+            return (passing, name in two_ports, -core.degree(name), -order[name])
+
+        a, b = flat[0]
+        layer[min((a, b), key=cost)] += 1
 
 
 def _apart(graph: BondGraph, layer: dict[str, int]) -> None:
@@ -258,21 +288,35 @@ def _crossings(columns: list[list[str]], spine: nx.Graph) -> int:
     return total
 
 
-def _hang(junction: str, elements: list[str], half: dict, up_first: bool) -> dict:
+def _hang(junction: str, elements: list[str], half: dict, up_first: bool, away: list) -> dict:
     """Each hung element's offset from its junction: alternately above and below, fanned
-    out when several share a side, each at a bond's length from the junction's box."""
+    out when several share a side (as far from the junction's other bonds, at angles
+    `away`, as `TILTS` allows), each at a bond's length from the junction's box."""
     sides = ([], [])
     for i, element in enumerate(elements):
         sides[i % 2].append(element)
     offsets = {}
     for sign, members in zip((1, -1) if up_first else (-1, 1), sides, strict=True):
-        tilts = TILTS.get(len(members), np.linspace(-60.0, 60.0, len(members)))
+        tilts = _tilts(len(members), [sign * (90 - a) for a in away])
         for element, tilt in zip(members, tilts, strict=False):
             direction = np.array([np.sin(np.radians(tilt)), sign * np.cos(np.radians(tilt))])
             reach = exit_distance(half[junction], direction) + RISE
             reach += exit_distance(half[element], direction)
             offsets[element] = direction * reach * (1 + 0.25 * (len(members) > 1))
     return offsets
+
+
+def _tilts(count: int, others: list[float]) -> tuple[float, ...]:
+    """`count` tilts from the vertical (degrees), the fan of `TILTS` turned as far from
+    the `others` (the tilts of the junction's bonds) as it can turn, up to 30 degrees."""
+    fan = np.array(TILTS.get(count, np.linspace(-60.0, 60.0, count)))
+
+    def clearance(turn: float) -> float:
+        gaps = [abs((t + turn) - o) for t in fan for o in others if abs(o) <= 90]
+        return min([*gaps, 45.0])  # beyond 45 degrees, any is as good
+
+    turns = sorted(np.arange(-30.0, 31.0, 5.0), key=abs)  # the least turn among the best
+    return tuple(fan + max(turns, key=clearance))
 
 
 @dataclass(frozen=True)
@@ -313,7 +357,28 @@ def _abscissae(columns, extent: dict, chains: dict, spacing: float) -> list[floa
     return x
 
 
-def _ordinates(spine: nx.Graph, columns, extent: dict, chains: dict, spacing: float) -> dict:
+def _fans(spine: nx.Graph, columns, x: list[float], half: dict, spacing: float) -> dict:
+    """The least height between neighbours in a layer that are bonded to one label in the
+    next (or last) layer: the angle between the two bonds there must keep each one's
+    causal stroke, `FAN` from the label's centre, off the other."""
+    least = {}
+    for c, column in enumerate(columns):
+        for a, b in pairwise(column):
+            for shared in set(spine[a]) & set(spine[b]):
+                reach = half[shared][0]  # the box, its gap and a stroke's length: inches
+                if reach <= FAN * spacing:  # a bend: no stroke there
+                    continue
+                angle = np.arcsin(FAN * spacing / reach)
+                dx = abs(
+                    x[c] - x[c + 1 if shared in columns[min(c + 1, len(columns) - 1)] else c - 1]
+                )
+                least[(a, b)] = max(least.get((a, b), 0.0), float(dx * np.tan(angle)))
+    return least
+
+
+def _ordinates(
+    spine: nx.Graph, columns, extent: dict, chains: dict, spacing: float, fans: dict
+) -> dict:
     """Heights: the least total slope of the bonds between blocks, with each layer in its
     order and every subsystem's box clear of the blocks outside it (a linear programme)."""
     names = [n for column in columns for n in column]
@@ -332,6 +397,7 @@ def _ordinates(spine: nx.Graph, columns, extent: dict, chains: dict, spacing: fl
         gap = extent[above].down + extent[below].up + VGAP * spacing
         gap += BOX_PAD * len(inside[above] - inside[below])
         gap += (BOX_PAD + BOX_TITLE) * len(inside[below] - inside[above])
+        gap = max(gap, fans.get((above, below), 0.0))
         rows.append(({index[below]: 1, index[above]: -1}, -gap))
     for n in names:
         rows.append(({index[n]: 1, top: -1}, -extent[n].up))
