@@ -20,7 +20,7 @@ from mtt.derivation.causality import assign
 from mtt.derivation.pipeline import load
 from mtt.language.components import Role
 from mtt.present import drawing
-from mtt.present.picture import BondPicture, problems
+from mtt.present.picture import BondPicture, problems, texts
 
 ROOT = Path(__file__).resolve().parent.parent
 SUBSYSTEMS = ROOT / "tests" / "data" / "subsystems"
@@ -58,6 +58,26 @@ def test_labels_and_numbers_are_never_overlapped(path):
     """No text on another; no bond, stroke, barb or signal through a text; no signal along
     a bond; no component in a subsystem's box that is not part of it."""
     assert kinds(path, "overlap", "through", "along", "stranger") == []
+
+
+@pytest.mark.parametrize("path", MODELS, ids=IDS)
+def test_everything_is_inside_the_picture(path):
+    picture = drawn(path)[1]
+    for what, (centre, half) in texts(picture):
+        assert np.all(centre - half >= picture.lower) and np.all(centre + half <= picture.upper), (
+            what
+        )
+
+
+def test_a_long_title_widens_a_small_picture(tmp_path):
+    model = tmp_path / "small.bg"
+    model.write_text(
+        'model small "' + "a description longer than the bond graph " * 3 + '"\nSe:a -> De:b\n'
+    )
+    picture = drawing.picture(load(model))
+    centre, half = picture.title.box
+    assert centre[0] + half[0] <= picture.upper[0] and centre[0] - half[0] > picture.lower[0]
+    assert picture.upper[0] - picture.lower[0] > 2 * half[0]
 
 
 @pytest.mark.parametrize("path", MODELS, ids=IDS)

@@ -33,15 +33,8 @@ from mtt.estimator.codegen import write_atomic
 from mtt.language.bondgraph import BondGraph
 from mtt.language.components import Role
 from mtt.present.geometry import Box, Obstacles, pieces
-from mtt.present.layout import (
-    BOX_PAD,
-    BOX_TITLE,
-    Variant,
-    exit_distance,
-    layout,
-    owner,
-    owners,
-)
+from mtt.present.layering import owner, owners
+from mtt.present.layout import BOX_PAD, BOX_TITLE, Variant, exit_distance, layout
 from mtt.present.picture import END, TICK, BondPicture, Label, Picture, problems
 
 __all__ = ["Picture", "figure", "picture", "problems", "render", "save", "signals"]
@@ -167,10 +160,13 @@ def _place(graph: BondGraph, causal: CausalBondGraph | None, variant: Variant) -
     upper = np.max([c[1] for c in corners], axis=0) + MARGIN
     words = graph.name + (f": {graph.description}" if graph.description else "")
     half = _measure(words, TITLE_FONT, False)
-    title = Label(words, np.array([lower[0] + half[0], upper[1] + half[1]]), half, NUMBER_INK)
+    title = Label(
+        words, np.array([lower[0] + MARGIN + half[0], upper[1] + half[1]]), half, NUMBER_INK
+    )
+    upper = np.array([max(upper[0], title.centre[0] + half[0] + MARGIN), upper[1] + 2 * half[1]])
     return Picture(title, MappingProxyType(labels), tuple(bonds), arrows,
                    MappingProxyType(boxes), MappingProxyType(box_names), lower,
-                   upper + [0, 2 * half[1]])  # fmt: skip
+                   upper)  # fmt: skip
 
 
 def _bonds(graph: BondGraph, causal, labels: dict[str, Label], bends: dict) -> list[BondPicture]:

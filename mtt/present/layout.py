@@ -4,11 +4,9 @@ Textbooks draw a bond graph as a chain of junctions from the source on the left 
 detector on the right, with each junction's one-port elements hung above and below it.
 This layout does that in Sugiyama's manner:
 
-1. the spine (every component but the elements hung on a junction) is put in layers by
-   its distance along the bonds from the input (for a part, from its inward ports), so
-   that a bond joins neighbouring layers and no dummy nodes are needed; other sources go
-   one layer before what they drive, detectors one after what they read, and a junction
-   at the end of a chain continues it with one of its elements;
+1. the spine (every component but the elements hung on a junction) is put in layers
+   (`layering`: by distance from the input, subsystems apart, bends where bonds pass
+   layers);
 2. each layer is ordered by the barycentre of its neighbours in the layer before (then
    after), sweeping back and forth and keeping the order with the fewest crossings; the
    components of one subsystem stay together, so that its box holds no stranger;
@@ -29,7 +27,7 @@ from scipy.optimize import linprog
 from scipy.sparse import coo_matrix
 
 from mtt.language.bondgraph import BondGraph
-from mtt.language.components import PortRule, Role
+from mtt.present.layering import hung_elements, layers, owners, route
 
 SPAN = 0.42  # the visible length of a bond between layers
 RISE = 0.32  # ... and of a bond to an element hung on its junction
@@ -38,7 +36,6 @@ BOX_PAD, BOX_TITLE = 0.07, 0.17  # a subsystem's box around its labels; the stri
 BEND = 0.06  # how far labels keep from a bond that passes their layer
 FAN = 0.16  # two bonds that leave one label part by this much where their strokes are
 SWEEPS = 8  # barycentre sweeps (each down and up) while crossings remain
-HUNG = {Role.RESISTOR, Role.STORAGE, Role.MODULATED}
 # the tilts from the vertical of 1, 2, 3... elements hung on one side of a junction
 TILTS = {1: (0.0,), 2: (-32.0, 32.0), 3: (-50.0, 0.0, 50.0)}
 
@@ -52,27 +49,11 @@ class Variant:
     turn: bool = False  # turn hung elements away from the junction's other bonds
 
 
-def owner(graph: BondGraph, name: str) -> str:
-    """The innermost subsystem a component belongs to ("" for the model itself)."""
-    owners = [s.name for s in graph.subsystems if name.startswith(s.name + ".")]
-    return max(owners, key=len, default="")
-
-
-def owners(graph: BondGraph, name: str) -> tuple[str, ...]:
-    """Every subsystem a component belongs to, outermost first."""
-    return tuple(s.name for s in graph.subsystems if name.startswith(s.name + "."))
-
-
 def exit_distance(half: np.ndarray, direction: np.ndarray) -> float:
     """How far from its centre along the unit `direction` a ray leaves a box of half-sizes
     `half` (a label's box: bonds start at its edge)."""
     scale = [h / abs(d) for h, d in zip(half, direction, strict=True) if abs(d) > 1e-12]
     return min(scale) if scale else 0.0
-
-
-def inward_port(graph: BondGraph, name: str) -> bool:
-    """A part's port whose bond points into the part (drawn on the left, like a source)."""
-    return graph.component(name).type.role is Role.PORT and any(b.tail == name for b in graph.bonds)
 
 
 @dataclass(frozen=True)
@@ -86,11 +67,11 @@ class Layout:
 def layout(graph: BondGraph, half: dict[str, np.ndarray], variant: Variant = Variant()) -> Layout:
     """Where the labels go (inches, y up) for labels of half-sizes `half`."""
     simple = nx.Graph(graph.graph.to_undirected())
-    hung = _hung(graph, simple)
+    hung = hung_elements(graph, simple)
     spine = nx.Graph(simple.subgraph(n for n in simple if n not in hung))
-    layer = _layers(graph, spine)
+    layer = layers(graph, spine)
     chains = {n: owners(graph, n) for n in spine}
-    routes = _route(spine, layer, chains)
+    routes = route(spine, layer, chains)
     half = {**half, **{d: np.array([0.0, BEND]) for via in routes.values() for d in via}}
     columns = _order(spine, layer, chains)
     x = None
@@ -119,123 +100,6 @@ def layout(graph: BondGraph, half: dict[str, np.ndarray], variant: Variant = Var
         bends[(a, b)] = np.array([position[d] for d in via])
         bends[(b, a)] = bends[(a, b)][::-1]
     return Layout({c.name: position[c.name] for c in graph.components}, bends)
-
-
-def _hung(graph: BondGraph, simple: nx.Graph) -> dict[str, str]:
-    """The elements hung on a junction (element -> junction): one-ports that store,
-    dissipate or are modulated, of the junction's own file. A junction at the end of a
-    chain continues it with its last element instead."""
-    hung = {}
-    for c in graph.components:
-        if c.type.role in HUNG and c.type.ports is PortRule.ONE and simple.degree(c.name) == 1:
-            (junction,) = simple[c.name]
-            same_file = owner(graph, junction) == owner(graph, c.name)
-            if graph.component(junction).type.role is Role.JUNCTION and same_file:
-                hung[c.name] = junction
-    for junction in dict.fromkeys(hung.values()):
-        if sum(n not in hung for n in simple[junction]) <= 1:
-            del hung[[h for h, j in hung.items() if j == junction][-1]]
-    return hung
-
-
-def _layers(graph: BondGraph, spine: nx.Graph) -> dict[str, int]:
-    """Distance from the input along the bonds, then the subsystems that share layers
-    moved apart (a box holds no other subsystem's column); sources one layer before what
-    they drive, detectors one after what they read."""
-    role = {n: graph.component(n).type.role for n in spine}
-    sources = [n for n in spine if role[n] is Role.SOURCE or inward_port(graph, n)]
-    ends = {n for n in spine if spine.degree(n) == 1 and (n in sources or role[n] is Role.DETECTOR)}
-    roots = [graph.input] if graph.input in sources else sources
-    core = spine.subgraph(n for n in spine if n not in ends or n in roots)
-    layer: dict[str, int] = {}
-    starts = roots + [n for n in core if n not in roots]
-    for part in sorted(nx.connected_components(core), key=lambda p: min(map(starts.index, p))):
-        first = [n for n in starts if n in part]
-        for depth, names in enumerate(
-            nx.bfs_layers(core, [n for n in first if n in roots] or first[:1])
-        ):
-            layer.update(dict.fromkeys(names, depth))
-    for again in (False, True):  # after moving subsystems apart, the model's own again
-        for end in ends if not again else [e for e in ends if not owners(graph, e)]:
-            (neighbour,) = spine[end]  # the input too: just before what it drives
-            if neighbour in layer:
-                layer[end] = layer[neighbour] + (-1 if end in sources else 1)
-            else:  # a source bonded to a detector, alone
-                layer[end] = int(end not in sources)
-        if not again:
-            two_ports = {n for n in core if role[n] is Role.TWO_PORT}
-            _unflat(core, layer, two_ports)
-            _apart(graph, layer)
-            _unflat(core, layer, two_ports)
-    low = min(layer.values())
-    return {n: d - low for n, d in layer.items()}
-
-
-def _unflat(core: nx.Graph, layer: dict[str, int], two_ports: set) -> None:
-    """No bond within a layer (it would run through the layer): one of its ends moves a
-    layer on, the one whose move makes the fewest bonds pass a layer (then not a two-port,
-    which stays between its two bonds; then the busier one, then the later in model
-    order), until none is left."""
-    order = {n: i for i, n in enumerate(core)}
-    for _ in range(len(order) ** 2):
-        flat = [(a, b) for a, b in core.edges() if layer[a] == layer[b]]
-        if not flat:
-            return
-
-        def cost(name: str) -> tuple:
-            passing = sum(layer[m] == layer[name] - 1 for m in core[name])
-            return (passing, name in two_ports, -core.degree(name), -order[name])
-
-        a, b = flat[0]
-        layer[min((a, b), key=cost)] += 1
-
-
-def _apart(graph: BondGraph, layer: dict[str, int]) -> None:
-    """Move right whatever starts within another subsystem's layers, until no two
-    subsystems (neither inside the other) share a layer."""
-    members = {s.name: [n for n in layer if s.name in owners(graph, n)] for s in graph.subsystems}
-    members = {s: m for s, m in members.items() if m}
-    while True:
-        span = {s: (min(layer[n] for n in m), max(layer[n] for n in m)) for s, m in members.items()}
-        clashes = [
-            (span[a], span[b], a, b) if span[a] <= span[b] else (span[b], span[a], b, a)
-            for a, b in combinations(span, 2)
-            if not (a.startswith(b + ".") or b.startswith(a + "."))
-            and span[a][0] <= span[b][1]
-            and span[b][0] <= span[a][1]
-        ]
-        if not clashes:
-            return
-        (_, high), (low, _), first, _ = min(clashes)
-        keep = set(members[first])
-        for name in layer:
-            if layer[name] >= low and name not in keep:
-                layer[name] += high - low + 1
-
-
-def _route(spine: nx.Graph, layer: dict[str, int], chains: dict) -> dict:
-    """Bonds that pass layers get a bend in each (Sugiyama's dummy nodes), inside the
-    boxes their ends are in where those boxes reach; (a, b) -> the bends from a to b."""
-    routes = {}
-    spans = {}
-    for name, chain in chains.items():
-        for box in chain:
-            low, high = spans.get(box, (layer[name], layer[name]))
-            spans[box] = (min(low, layer[name]), max(high, layer[name]))
-    for a, b in list(spine.edges()):
-        if abs(layer[a] - layer[b]) <= 1:
-            continue
-        if layer[a] > layer[b]:
-            a, b = b, a
-        spine.remove_edge(a, b)
-        via = [f"\0{a}\0{b}\0{c}" for c in range(layer[a] + 1, layer[b])]
-        for bend, c in zip(via, range(layer[a] + 1, layer[b]), strict=True):
-            layer[bend] = c
-            sides = [[s for s in chains[end] if spans[s][0] <= c <= spans[s][1]] for end in (a, b)]
-            chains[bend] = tuple(max(sides, key=len))
-        nx.add_path(spine, [a, *via, b])
-        routes[(a, b)] = via
-    return routes
 
 
 def _order(spine: nx.Graph, layer: dict[str, int], chains: dict) -> list[list[str]]:
