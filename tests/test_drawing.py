@@ -311,3 +311,18 @@ def test_a_bond_within_a_layer_is_moved_on_and_bonds_fan_out(tmp_path):
         if {graph.bond(b.number).tail, graph.bond(b.number).head} == {"a", "b"}
     )
     assert len(direct.path) == 3  # it passes GY's layer with a bend
+
+
+def test_a_signal_that_reads_a_subsystems_port_starts_at_the_bond_it_became(tmp_path):
+    (tmp_path / "stage.bg").write_text((SUBSYSTEMS / "parts" / "stage.bg").read_text())
+    model = tmp_path / "fed.bg"
+    model.write_text(
+        'model fed\nsubsystem s1 = "stage.bg"\nSe:v -> s1.in\ns1.out -> 1:j\n'
+        "1:j -> R:r(1)\nMSe:m(2*e(s1.out)) -> 1:j\n1:j -> Df:y\n"
+    )
+    graph = load(model)
+    picture = drawing.picture(graph, assign(graph))
+    assert problems(picture) == []
+    (arrow,) = picture.signals
+    bond = next(b for b in picture.bonds if b.number == graph.port_bonds["s1.out"])
+    assert np.linalg.norm(arrow[0] - bond.path.mean(axis=0)) < 1e-9  # from the joined bond

@@ -33,7 +33,7 @@ from mtt.estimator.codegen import write_atomic
 from mtt.language.bondgraph import BondGraph
 from mtt.language.components import Role
 from mtt.present.geometry import Box, Obstacles, pieces
-from mtt.present.layering import owner, owners
+from mtt.present.layering import owner
 from mtt.present.layout import BOX_PAD, BOX_TITLE, Variant, exit_distance, layout
 from mtt.present.picture import END, TICK, BondPicture, Label, Picture, problems
 
@@ -147,8 +147,8 @@ def _place(graph: BondGraph, causal: CausalBondGraph | None, variant: Variant) -
                    for reader, read in signals(graph))  # fmt: skip
     boxes = subsystem_boxes(graph, position, {n: h + GAP for n, h in size.items()})
     box_names = {
-        name: Label(name.rpartition(".")[2], lower + (upper - lower) * [0, 1] + half * [1, -1]
-                    + [0.03, -0.01], half, NUMBER_INK)
+        name: Label(name.rpartition(".")[2], np.array([lower[0], upper[1]]) + half * [1, -1]
+                    + [0.03, -0.01], half, NUMBER_INK)  # in the top-left corner
         for name, (lower, upper) in boxes.items()
         for half in [_measure(name.rpartition(".")[2], BOX_FONT, False)]
     }  # fmt: skip
@@ -258,11 +258,6 @@ def signals(graph: BondGraph) -> list[tuple[str, str]]:
             if (component.name, use.target) not in pairs:
                 pairs.append((component.name, use.target))
     return pairs
-
-
-def members(graph: BondGraph, subsystem: str) -> list[str]:
-    """The components inside a subsystem's box (its own and its subsystems')."""
-    return [c.name for c in graph.components if subsystem in owners(graph, c.name)]
 
 
 def figure(graph: BondGraph, causal: CausalBondGraph | None = None) -> Figure:
