@@ -95,7 +95,7 @@ def runs(tmp_path_factory, mtt_together) -> dict:
         "version": ["--version"],
     }
     results = dict(zip(commands, mtt_together(list(commands.values())), strict=True))
-    records = [json.loads(line) for line in results["json"].stdout.splitlines()]
+    records = json.loads(results["json"].stdout)["files"]
     return {
         **results,
         "records": {record["file"]: record for record in records},
@@ -104,14 +104,15 @@ def runs(tmp_path_factory, mtt_together) -> dict:
     }
 
 
-def test_check_json_prints_one_record_per_file_in_order(runs):
+def test_check_json_prints_one_document_with_a_record_per_file_in_order(runs):
     run = runs["json"]
     assert run.returncode == 2  # some files have errors
     assert run.stderr == ""
-    lines = run.stdout.splitlines()
-    assert [json.loads(line)["file"] for line in lines] == runs["json_files"]
-    for line in lines:
-        assert_record_shape(json.loads(line))
+    document = json.loads(run.stdout)  # one document, not a JSON object per line
+    assert set(document) == {"ok", "files"} and document["ok"] is False
+    assert [record["file"] for record in document["files"]] == runs["json_files"]
+    for record in document["files"]:
+        assert_record_shape(record)
 
 
 def test_check_json_on_the_shipped_models(runs):

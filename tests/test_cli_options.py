@@ -82,3 +82,21 @@ def test_negative_numbers_are_values_on_the_mtt_command_line(capsys):
     with pytest.raises(SystemExit):  # an option is still an option
         parse(["estimate", "m.bg", "--k0", "1", "-x"])
     assert "unrecognized arguments: -x" in capsys.readouterr().err
+
+
+def test_lists_take_commas_and_spaces_alike(capsys):
+    from mtt.cli.main import make_parser
+
+    parse = make_parser().parse_args
+    for words in (["0,5,20"], ["0", "5", "20"], ["0,5", "20"]):
+        args = parse(["estimate", "m.bg", "--k0", *words, "--filter-T", *words])
+        assert args.k0 == args.filter_T == [0.0, 5.0, 20.0]
+        assert parse(["bode", "m.bg", "--k", *words]).k == [0.0, 5.0, 20.0]
+    several = parse(["estimate", "m.bg", "--k0", "ra=1,jl=5", "ra=2,jl=9"]).k0
+    assert several == [{"ra": 1.0, "jl": 5.0}, {"ra": 2.0, "jl": 9.0}]
+    with pytest.raises(SystemExit):
+        parse(["estimate", "m.bg", "--k0", "0,x"])
+    assert "argument --k0: 'x' in '0,x' is not a number" in capsys.readouterr().err
+    # a space inside one point of several unknowns: the message says how to write it
+    with pytest.raises(MttError, match=r"joined by commas: --k0 ra=\.\.\.,jl=\.\.\.; a space"):
+        in_unknowns_order({"ra": 1.0}, ("ra", "jl"), "--k0")

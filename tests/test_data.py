@@ -68,3 +68,22 @@ def test_settings_errors_name_the_parameters_the_way_the_caller_spells_them(
         records.input_signal(rlc, **options)
     assert str(caught.value).startswith(python)
     assert as_options(caught.value).startswith(command_line)
+
+
+def test_a_spreadsheet_s_semicolons_or_tabs_are_read_and_a_missing_column_says_columns(
+    rlc, tmp_path
+):
+    rows = [("0", "1", "0"), ("0.5", "1", "0.25"), ("1", "1", "0.5")]
+    for delimiter in (";", "\t"):
+        path = tmp_path / "semi.csv"
+        path.write_text("\n".join(delimiter.join(row) for row in [("t", "u", "y"), *rows]))
+        assert records.read(rlc, str(path)).y.tolist() == [0, 0.25, 0.5]
+    wrong = tmp_path / "wrong.csv"
+    wrong.write_text("time;volts;speed\n0;1;0\n1;1;0.5\n")
+    with pytest.raises(DataError) as caught:
+        records.read(rlc, str(wrong))
+    assert str(wrong) in str(caught.value) and "(the header names time, volts, speed)" in str(
+        caught.value
+    )
+    assert as_options(caught.value).endswith("output with --columns T,U,Y (now t,u,y)")
+    assert records.read(rlc, str(wrong), ("time", "volts", "speed")).t.tolist() == [0, 1]

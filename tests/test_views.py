@@ -99,7 +99,6 @@ def test_mtt_bode_figure_and_json(tmp_path, capsys):
 @pytest.mark.parametrize(
     ("argv", "says"),
     [
-        (["--k", "1"], "say where the diagram goes"),
         (["--k", "x", "--json"], "expected numbers separated by commas"),
         (["--k", "1,nan", "--json"], "expected finite numbers"),
         # was an internal error (LinAlgError) after a RuntimeWarning on stderr
@@ -114,6 +113,28 @@ def test_mtt_bode_usage_errors(capsys, argv, says):
         status = exit.code
     err = capsys.readouterr().err
     assert status == 2 and says in err and "Warning" not in err
+
+
+def test_draw_and_bode_write_a_default_file_and_bode_takes_lists_either_way(
+    tmp_path, capsys, monkeypatch
+):
+    monkeypatch.chdir(tmp_path)
+    assert main(["draw", str(mtt.example("rlc"))]) == 0
+    assert (tmp_path / "rlc.svg").read_text().startswith("<?xml")
+    assert main(["bode", str(mtt.example("rlc")), "--k", "0.1,0.2", "0.3"]) == 0
+    assert "rlc_bode.svg: Bode diagram of rlc at c = 0.1; c = 0.2; c = 0.3" in (
+        capsys.readouterr().out
+    )
+    assert (tmp_path / "rlc_bode.svg").stat().st_size > 1000
+    # several unknowns: one curve at the file's values; --k needs one unknown chosen
+    status, out, _ = run(capsys, "bode", str(mtt.example("dc_motor")), "--json")
+    record = json.loads(out)
+    assert status == 0 and record["unknowns"] == ["ra", "jl"] and record["k"] == [[1.0, 10.0]]
+    status, _, err = run(capsys, "bode", str(mtt.example("dc_motor")), "--k", "2", "--json")
+    assert status == 2 and "choose which with --unknown NAME" in err
+    status, out, _ = run(capsys, "bode", str(mtt.example("dc_motor")), "--unknown", "jl",
+                         "--k", "5", "--json")  # fmt: skip
+    assert status == 0 and json.loads(out)["k"] == [5.0]
 
 
 def test_mtt_bode_of_a_zero_transfer_function_is_an_error_without_warnings(tmp_path, capsys):

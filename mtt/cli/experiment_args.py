@@ -10,7 +10,15 @@ from __future__ import annotations
 import argparse
 from collections.abc import Callable
 
-from mtt.cli.options import BoundsAction, add_parameter_options, given, named_values
+from mtt.cli.options import (
+    BoundsAction,
+    Flatten,
+    add_parameter_options,
+    given,
+    named_values,
+    numbers,
+    starts,
+)
 from mtt.data import DEFAULT_DT, DEFAULT_SEED, DEFAULT_T_END
 
 
@@ -105,12 +113,12 @@ def _filter_options(group, several: bool, default: str | None) -> None:
         help='the filter: "auto" (chosen from A(s, k) and the sampling) or a polynomial in s, '
         f'e.g. "(1+s)^5" (default {default})',
     )
+    listed = {"type": numbers, "nargs": "+", "action": Flatten} if several else {"type": float}
     group.add_argument(
         "--filter-T",
-        type=float,
-        nargs="+" if several else None,
         metavar="T",
-        help="the filter(s) (1 + sT)^(n+1)",
+        help="the filter(s) (1 + sT)^(n+1)" + (", --filter-T 0.5,1,2 or 0.5 1 2" * several),
+        **listed,
     )
 
 
@@ -190,12 +198,13 @@ def register(commands) -> None:
     group = estimate.add_argument_group("estimator")
     group.add_argument(
         "--k0",
-        type=named_values,
+        type=starts,
         nargs="+",
+        action=Flatten,
         required=True,
         metavar="V|NAME=V,...",
-        help="initial estimate(s): numbers for one unknown; for several, each start by name "
-        "(--k0 ra=0.5,jl=5 ra=2,jl=20)",
+        help="initial estimate(s): numbers for one unknown (--k0 0,5,20 or --k0 0 5 20); for "
+        "several, each start by name, a space between starts (--k0 ra=0.5,jl=5 ra=2,jl=20)",
     )
     group.add_argument("--beta", type=float, default=0.1, help="forgetting factor (default 0.1)")
     weight = group.add_mutually_exclusive_group()

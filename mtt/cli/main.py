@@ -93,12 +93,13 @@ def _check_one(file: str, args) -> tuple[dict, ModelError | None, BondGraph | No
 
 def cmd_check(args) -> int:
     status = EXIT_OK
+    records = []
     for file in args.files:
         record, problem, graph, notes = _check_one(file, args)
         if problem is not None:
             status = EXIT_MODEL_ERROR
         if args.json:
-            _print_json(record)
+            records.append(record)
             continue
         for note in (*(graph.warnings if graph else ()), *notes):
             print(note.render(), file=sys.stderr)
@@ -117,6 +118,9 @@ def cmd_check(args) -> int:
             f"{file}: ok: {kind} {graph.name}, {record['components']} components, "
             f"{record['bonds']} bonds, {ends}{unknown}"
         )
+    if args.json:  # one document: a file's record, or for several {"ok", "files": [...]}
+        several = {"ok": all(r["ok"] for r in records), "files": records}
+        _print_json(records[0] if len(records) == 1 else several)
     return status
 
 
@@ -207,7 +211,12 @@ def make_parser() -> argparse.ArgumentParser:
         description="Validate .bg model files; exit 0 when every file is valid, 2 otherwise.",
     )
     check.add_argument("files", nargs="+", metavar="FILE")
-    check.add_argument("--json", action="store_true", help="print one JSON object per file")
+    check.add_argument(
+        "--json",
+        action="store_true",
+        help='print one JSON document: the file\'s record, for several files {"ok": ..., '
+        '"files": [records in order]}',
+    )
     check.add_argument(
         "--identifiability",
         action="store_true",

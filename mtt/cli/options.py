@@ -80,13 +80,16 @@ def add_selection_options(parser: argparse.ArgumentParser) -> None:
         help="the parameters to identify, in this order (default: those the model declares "
         "'unknown')",
     )
-    for role, what in (("input", "source"), ("output", "detector")):
+    for role, what, example in (
+        ("input", "source", "Se:v, or a subsystem's Se:motor.v"),
+        ("output", "detector", "Df:w, or a subsystem's De:motor.vc"),
+    ):
         group.add_argument(
             f"--{role}",
             metavar="TYPE:NAME",
             type=_component,
             help=f"the {what} to use as the {role}, over the file's '{role}' statement "
-            "(dotted names for a subsystem's: Se:motor.v)",
+            f"(e.g. {example})",
         )
 
 
@@ -201,6 +204,30 @@ def named_values(text: str) -> Named:
     return _by_name(text, _finite) if "=" in text else _finite(text, text)
 
 
+def numbers(text: str) -> list[float]:
+    """A list option's word: finite numbers separated by commas (`1,5,10`); the option
+    (action `Flatten`) extends its list with them: `1,5 10` and `1 5 10` say the same."""
+    parts = [part for part in text.split(",") if part.strip()]
+    if not parts:
+        raise argparse.ArgumentTypeError(f"expected numbers separated by commas, not {text!r}")
+    return [_finite(part, text) for part in parts]
+
+
+class Flatten(argparse.Action):
+    """nargs="+" over a type that gives lists (`numbers`, `starts`): one flat list, the
+    option repeated or not."""
+
+    def __call__(self, parser, namespace, values, option_string=None) -> None:
+        items = list(getattr(namespace, self.dest, None) or [])
+        setattr(namespace, self.dest, items + [value for group in values for value in group])
+
+
+def starts(text: str) -> list[Named]:
+    """The type of estimate's --k0 (action `Flatten`): each word a point by name
+    (`a=1,b=2`), or bare numbers for one unknown, several separated by commas (`0,5,20`)."""
+    return [_by_name(text, _finite)] if "=" in text else numbers(text)
+
+
 def named_bounds(text: str) -> NamedBounds:
     """The type of --bounds: `a=0:5,b=1:20`, or a bare `0:5` for one unknown."""
     return _by_name(text, _interval) if "=" in text else _interval(text, text)
@@ -229,7 +256,12 @@ def in_unknowns_order(given, unknowns: tuple[str, ...], option: str, complete: b
         )
     missing = [name for name in unknowns if name not in given]
     if complete and missing:
-        raise MttError(f"{option}: no value for {', '.join(missing)}", kind="bad_value")
+        example = ",".join(f"{name}=..." for name in unknowns)
+        raise MttError(
+            f"{option}: no value for {', '.join(missing)} (one point names every unknown, "
+            f"joined by commas: {option} {example}; a space starts another point)",
+            kind="bad_value",
+        )
     return tuple(given.get(name) for name in unknowns)
 
 

@@ -11,6 +11,7 @@ import sys
 from pathlib import Path
 
 from mtt.cli.options import (
+    Flatten,
     add_parameter_options,
     add_selection_options,
     choice_from_args,
@@ -32,12 +33,12 @@ def _figure_path(text: str) -> str:
 
 
 def _values(text: str) -> list[float]:
-    """--k 1,5,10"""
+    """--k 1,5,10 (also --k 1 5 10: the option extends the list)"""
     try:
         values = [float(part) for part in text.split(",") if part.strip()]
     except ValueError:
         raise argparse.ArgumentTypeError(
-            f"expected numbers separated by commas, not {text!r}"
+            f"expected numbers separated by commas or spaces, not {text!r}"
         ) from None
     if not values or not all(abs(v) < float("inf") for v in values):
         raise argparse.ArgumentTypeError(f"expected finite numbers, not {text!r}")
@@ -90,6 +91,7 @@ def cmd_draw(args) -> int:
         problem = exc
         print(exc.render(), file=sys.stderr)
         print(f"mtt draw: warning: drawn without causal strokes ({exc.kind})", file=sys.stderr)
+    args.out = args.out or f"{Path(args.file).stem}.svg"  # in the working directory
     _save(drawing.figure(graph, causal), args.out, args.dpi)
     if args.json:
         _print_json(
@@ -112,42 +114,58 @@ def cmd_bode(args) -> int:
     choice = choice_from_args(args)
     model = Model(load(args.file, choice.selection), choice)
     if not (args.out or args.json):
-        raise MttError("mtt bode: say where the diagram goes: -o FILE or --json", kind="usage")
-    if len(model.unknowns) > 1:
+        args.out = f"{Path(args.file).stem}_bode.svg"  # in the working directory
+    unknowns = model.unknowns
+    if len(unknowns) > 1 and args.k:
         raise MttError(
-            f"mtt bode draws one unknown, not {', '.join(model.unknowns)}: choose it with "
-            "--unknown NAME",
-            kind="unsupported",
+            f"--k gives values of one unknown; {model.name} has {len(unknowns)} "
+            f"({', '.join(unknowns)}): choose which with --unknown NAME (the others keep the "
+            "file's values), or leave --k out for the file's values of all",
+            kind="usage",
         )
-    unknown = model.unknowns[0] if model.unknowns else None
-    if unknown is None and args.k:
+    if not unknowns and args.k:
         raise MttError(f"{model.name} has no unknown: --k does not apply", kind="no_unknown")
-    values = args.k or [model.parameters[unknown] if unknown else None]
-    if unknown and values == [None]:
-        raise MttError(f"{model.name} gives no value of {unknown}: pass --k", kind="missing_value")
-    systems = []
-    for k in values:
-        num, den = model.transfer_function.at(**({unknown: k} if unknown else {}))
+    points = [{unknowns[0]: k} for k in args.k] if args.k else [{}]
+    missing = [name for name in unknowns if model.parameters[name] is None]
+    if not args.k and missing:
+        raise MttError(
+            f"{model.name} gives no value of {', '.join(missing)}: pass --k"
+            + ("" if len(unknowns) == 1 else " with --unknown NAME, or --set NAME=VALUE"),
+            kind="missing_value",
+        )
+    systems, labels = [], []
+    for point in points:
+        num, den = model.transfer_function.at(**point)
+        values = {name: point.get(name, model.parameters[name]) for name in unknowns}
+        label = ", ".join(f"{name} = {float(value):g}" for name, value in values.items())
         if not num.any():  # no magnitude in dB, no phase (scipy warns and gives -inf)
-            at = f" at {unknown} = {k:g}" if unknown else ""
-            raise MttError(f"G(s) is zero{at}: there is no Bode diagram", kind="bad_value")
-        systems.append((float(k) if unknown else float("nan"), num, den))
+            raise MttError(
+                f"G(s) is zero{' at ' + label if label else ''}: there is no Bode diagram",
+                kind="bad_value",
+            )
+        k = [float(values[name]) for name in unknowns]
+        systems.append((k[0] if len(k) == 1 else float("nan"), num, den))
+        labels.append((label or model.name, k[0] if len(k) == 1 else k or None))
     try:
         data = bode.bode(systems)
     except ValueError as exc:
         raise MttError(str(exc), kind="out_of_range") from None
     if args.out:
         title = f"{model.name}: Bode diagram from {model.input} to {model.output}"
-        _save(bode.figure(data, unknown=unknown or "k", title=title), args.out, args.dpi)
+        figure = bode.figure(data, labels=[label for label, _ in labels], title=title)
+        _save(figure, args.out, args.dpi)
     if args.json:
         _print_json(
             {"ok": True, "file": args.file, "out": args.out, "model": model.name,
-             "unknown": unknown, "k": list(data.values),
+             "unknown": unknowns[0] if len(unknowns) == 1 else None,
+             "unknowns": list(unknowns), "k": [k for _, k in labels],
              "frequency": data.frequency.tolist(), "magnitude_db": _finite(data.magnitude_db),
              "phase_deg": _finite(data.phase_deg)}
         )  # fmt: skip
     elif args.out:
-        print(f"wrote {args.out}: Bode diagram of {model.name} for {len(values)} value(s)")
+        print(
+            f"wrote {args.out}: Bode diagram of {model.name} at {'; '.join(lb for lb, _ in labels)}"
+        )
     return EXIT_OK
 
 
@@ -204,8 +222,9 @@ def register(commands) -> None:
         "causal stroke at the end of each bond that receives the effort.",
     )
     draw.add_argument("file", metavar="FILE")
-    draw.add_argument("-o", "--out", required=True, type=_figure_path,
-                      metavar="FILE.svg|png|pdf", help="the picture to write")  # fmt: skip
+    draw.add_argument("-o", "--out", type=_figure_path, metavar="FILE.svg|png|pdf",
+                      help="the picture to write (default MODEL.svg, MODEL the file's name "
+                      "without .bg, in the working directory)")  # fmt: skip
     draw.add_argument("--dpi", type=_dpi, default=150.0,
                       help="resolution of a .png (default 150)")  # fmt: skip
     add_selection_options(draw)
@@ -219,10 +238,12 @@ def register(commands) -> None:
         "curve per value of the unknown.",
     )
     bode.add_argument("file", metavar="FILE")
-    bode.add_argument("--k", type=_values, metavar="V1,V2,...",
-                      help="values of the unknown (default: the model file's)")  # fmt: skip
+    bode.add_argument("--k", type=_values, nargs="+", action=Flatten, metavar="V",
+                      help="values of the unknown, a curve each: --k 1,5,10 or --k 1 5 10 "
+                      "(default: the model file's values of every unknown, one curve)")  # fmt: skip
     bode.add_argument("-o", "--out", type=_figure_path, metavar="FILE.svg|png|pdf",
-                      help="the figure to write")  # fmt: skip
+                      help="the figure to write (default MODEL_bode.svg in the working "
+                      "directory, unless --json alone)")  # fmt: skip
     bode.add_argument("--dpi", type=_dpi, default=150.0,
                       help="resolution of a .png (default 150)")  # fmt: skip
     add_parameter_options(bode)

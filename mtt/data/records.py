@@ -8,8 +8,11 @@ came from and says in a note how each record was made (tables and figures print 
 
 from __future__ import annotations
 
+import csv
+import tempfile
 from collections.abc import Sequence
 from dataclasses import dataclass
+from pathlib import Path
 from types import ModuleType
 
 import numpy as np
@@ -22,7 +25,7 @@ from mtt.data import (
     SIGNAL_KINDS,
     DataError,
 )
-from mtt.present import values
+from mtt.present import tables, values
 
 COLUMNS = ("t", "u", "y")
 
@@ -53,7 +56,23 @@ def columns(given: str | Sequence[str] | None) -> tuple[str, str, str]:
 def read(module: ModuleType, path: str, names: Sequence[str] = COLUMNS) -> Record:
     """A measured record: the columns `names` (time, input, output) of a CSV file, its
     times increasing strictly."""
-    t, u, y = module.read_csv(path, tuple(names))
+    delimiter = _delimiter(path)
+    try:
+        if delimiter == ",":
+            t, u, y = module.read_csv(path, tuple(names))
+        else:
+            with tempfile.TemporaryDirectory() as folder:  # the module reads commas
+                commas = Path(folder) / Path(path).name
+                commas.write_text(_with_commas(path, delimiter), encoding="utf-8")
+                t, u, y = module.read_csv(str(commas), tuple(names))
+    except ValueError as error:
+        text = str(error).replace(str(commas), str(path)) if delimiter != "," else str(error)
+        if "no column" not in text:
+            raise ValueError(text) from None
+        raise DataError(
+            f"{text}: name the time, input and output with columns T,U,Y (now {','.join(names)})",
+            "columns",
+        ) from None
     late = np.flatnonzero(np.diff(t) <= 0)
     if late.size:  # named here: the module's message cannot name the file
         i = int(late[0])
@@ -63,6 +82,32 @@ def read(module: ModuleType, path: str, names: Sequence[str] = COLUMNS) -> Recor
             f"{later!r} (data row {i + 2}) follows {earlier!r} (data row {i + 1})"
         )
     return Record(t, u, y, None, None, f"{t.size} samples from {path}")
+
+
+DELIMITERS = (",", ";", "\t", "|")
+HEADER_BYTES = 1 << 16  # a header line longer than this is not sniffed (the reader says why)
+
+
+def _delimiter(path: str) -> str:
+    """The header line's delimiter: a comma, unless the line has none and splits on
+    another of DELIMITERS (a spreadsheet's ';' or a tab)."""
+    try:
+        with open(path, encoding="utf-8-sig", errors="replace") as file:
+            header = file.readline(HEADER_BYTES)
+    except OSError:
+        return ","  # the reader reports it, with the file's name
+    if "," in header:
+        return ","
+    counts = {d: header.count(d) for d in DELIMITERS[1:]}
+    best = max(counts, key=counts.get)
+    return best if counts[best] else ","
+
+
+def _with_commas(path: str, delimiter: str) -> str:
+    """The file's text with `delimiter` between fields, as the module's reader takes it."""
+    with open(path, encoding="utf-8-sig", newline="") as file:
+        rows = csv.reader(file, delimiter=delimiter)
+        return tables.csv_text(next(rows, []), rows)
 
 
 def input_signal(

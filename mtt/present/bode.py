@@ -54,12 +54,12 @@ def bode(systems: Sequence[tuple[float, np.ndarray, np.ndarray]]) -> Bode:
     return Bode(tuple(k for k, _, _ in systems), w, np.array(magnitude), np.array(phase))
 
 
-def figure(data: Bode, *, unknown: str, title: str) -> Figure:
+def figure(data: Bode, *, labels: Sequence[str], title: str) -> Figure:
+    """The magnitude and phase of each curve, labelled (`k = 5`, `ra = 1, jl = 10`)."""
     fig = Figure(figsize=(7.0, 5.6), layout="constrained")
     FigureCanvasAgg(fig)
     magnitude, phase = fig.subplots(2, 1, sharex=True)
-    for k, mag, ph in zip(data.values, data.magnitude_db, data.phase_deg, strict=True):
-        label = f"{unknown} = {k:g}"
+    for label, mag, ph in zip(labels, data.magnitude_db, data.phase_deg, strict=True):
         magnitude.semilogx(data.frequency, mag, label=label)
         phase.semilogx(data.frequency, ph, label=label)
     magnitude.set_ylabel("magnitude [dB]")
