@@ -326,3 +326,18 @@ def test_a_signal_that_reads_a_subsystems_port_starts_at_the_bond_it_became(tmp_
     (arrow,) = picture.signals
     bond = next(b for b in picture.bonds if b.number == graph.port_bonds["s1.out"])
     assert np.linalg.norm(arrow[0] - bond.path.mean(axis=0)) < 1e-9  # from the joined bond
+
+
+def test_a_piece_that_only_a_signal_reaches_follows_it_to_the_right(tmp_path):
+    # two tanks: the lower is fed by a modulated source that reads the upper's outflow,
+    # with no bond between them (issue 19's two_tanks has this shape)
+    model = tmp_path / "tanks.bg"
+    model.write_text(
+        "model tanks\nSf:pump -> 0:h1\n0:h1 -> C:c1(1)\n0:h1 -> R:o1(1)\n"
+        "MSf:fall(f(o1)) -> 0:h2\n0:h2 -> C:c2(1)\n0:h2 -> R:o2(1)\n0:h2 -> De:level\n"
+    )
+    graph = load(model)
+    picture = drawing.picture(graph, assign(graph))
+    assert problems(picture) == []
+    x = {name: label.centre[0] for name, label in picture.labels.items()}
+    assert x["pump"] < x["h1"] < x["o1"] < x["h2"] < x["level"]

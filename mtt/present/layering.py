@@ -53,8 +53,9 @@ def hung_elements(graph: BondGraph, simple: nx.Graph) -> dict[str, str]:
     return hung
 
 
-def layers(graph: BondGraph, spine: nx.Graph) -> dict[str, int]:
-    """Distance from the input along the bonds, then the subsystems that share layers
+def layers(graph: BondGraph, spine: nx.Graph, hung: dict[str, str]) -> dict[str, int]:
+    """Distance from the input along the bonds (a piece of the graph that only signals
+    reach starts a layer after what they read), then the subsystems that share layers
     moved apart (a box holds no other subsystem's column); sources one layer before what
     they drive, detectors one after what they read."""
     role = {n: graph.component(n).type.role for n in spine}
@@ -66,10 +67,11 @@ def layers(graph: BondGraph, spine: nx.Graph) -> dict[str, int]:
     starts = roots + [n for n in core if n not in roots]
     for part in sorted(nx.connected_components(core), key=lambda p: min(map(starts.index, p))):
         first = [n for n in starts if n in part]
+        after = _signalled(graph, part, hung, layer)
         for depth, names in enumerate(
             nx.bfs_layers(core, [n for n in first if n in roots] or first[:1])
         ):
-            layer.update(dict.fromkeys(names, depth))
+            layer.update(dict.fromkeys(names, depth + after))
     for again in (False, True):  # after moving subsystems apart, the model's own again
         for end in ends if not again else [e for e in ends if not owners(graph, e)]:
             (neighbour,) = spine[end]  # the input too: just before what it drives
@@ -84,6 +86,18 @@ def layers(graph: BondGraph, spine: nx.Graph) -> dict[str, int]:
             _unflat(core, layer, two_ports)
     low = min(layer.values())
     return {n: d - low for n, d in layer.items()}
+
+
+def _signalled(graph: BondGraph, part: set, hung: dict[str, str], layer: dict) -> int:
+    """The first layer for a piece of the graph: one after the last that its modulated
+    sources read from the pieces already placed (0 when they read none)."""
+    readers = [*part, *(h for h, junction in hung.items() if junction in part)]
+    read = [
+        hung.get(use.target, use.target)
+        for reader in readers
+        for use in getattr(graph.component(reader).argument, "signals", ()) or ()
+    ]
+    return max((layer[r] + 1 for r in read if r in layer and r not in part), default=0)
 
 
 def _unflat(core: nx.Graph, layer: dict[str, int], two_ports: set) -> None:
