@@ -50,10 +50,13 @@ def parameter_values(
         name: overrides.get(name, p.value.value if p.value is not None else None)
         for name, p in graph.parameters.items()
     }
-    kept = {
+    kept = {  # symbolic: every parameter given a number (one given by others stays bound)
         name
         for name, value in raw.items()
-        if value is None or symbolic or name in set(keep) or name in graph.unknowns
+        if value is None
+        or (symbolic and not value.free_symbols)
+        or name in set(keep)
+        or name in graph.unknowns
     }
     values: dict[sympy.Symbol, sympy.Expr] = {}
     for name in kept:

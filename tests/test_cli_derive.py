@@ -20,7 +20,7 @@ SYSTEMS = Path(__file__).resolve().parent / "data" / "systems"
 
 DC_DRIVE_THETA = [[10, 0], [10, 10], [1, 11], [0, 10], [0, 1], [-10, 0], [0, 0], [0, -10]]
 JSON_KEYS = ["ok", "model", "input", "output", "unknown", "unknowns", "monomials", "degrees",
-             "symbols", "num", "den", "n", "m", "N", "theta", "order"]  # fmt: skip
+             "symbols", "names", "num", "den", "n", "m", "N", "theta", "order"]  # fmt: skip
 
 
 def run(capsys, *argv) -> tuple[int, str, str]:
@@ -102,6 +102,7 @@ def test_tf_symbolic_rlc_json(mtt):
         "monomials": [[0], [1]],
         "degrees": {"c": 1},
         "symbols": ["r", "l"],
+        "names": {"c": "c", "l": "l", "r": "r"},
         "num": "c*s",
         "den": "c*l*s**2 + c*r*s + 1",
         "n": 2,

@@ -13,6 +13,8 @@ unknown and the kept symbols.
 
 from __future__ import annotations
 
+from collections import ChainMap
+from collections.abc import Mapping
 from dataclasses import dataclass, replace
 from functools import cache
 
@@ -26,7 +28,7 @@ from mtt.derivation.causality import CausalBondGraph
 from mtt.derivation.constants import Constants, Unsupported
 from mtt.derivation.parameters import Parametrisation
 from mtt.language.bondgraph import Component
-from mtt.language.components import PortVariables, Role
+from mtt.language.components import ComponentType, PortVariables, Role
 from mtt.language.diagnostics import ModelError, error
 
 INPUT, OUTPUT = "u", "y"
@@ -155,7 +157,8 @@ def _outputs(causal: CausalBondGraph, component: Component, v: PortVariables) ->
 
 
 def _times(a, b, K: Domain):
-    """a * b, without the general product (and its gcd) when one factor is 1 or -1."""
+    """a * b, without the general product (and its gcd) when one factor is 1 or -1, or
+    both are numbers."""
     if a == K.one:
         return b
     if b == K.one:
@@ -164,6 +167,16 @@ def _times(a, b, K: Domain):
         return -b
     if b == -K.one:
         return -a
+    if (
+        K.is_FractionField
+        and a.numer.is_ground
+        and a.denom.is_ground
+        and b.numer.is_ground
+        and b.denom.is_ground
+    ):
+        ground = K.domain
+        value = ground.quo(a.numer.LC * b.numer.LC, a.denom.LC * b.denom.LC)
+        return K.convert_from(value, ground)
     return a * b
 
 
@@ -180,10 +193,14 @@ def _solve(
     """
     others = sorted({name for row in rows for name in row} - set(unknowns))
     rows = [{name: c for name, c in row.items() if c != K.zero} for row in rows]
-    free_rows = list(range(len(rows)))
+    where: dict[str, set[int]] = {}  # column -> the rows holding it (a junction's are many)
+    for i, row in enumerate(rows):
+        for name in row:
+            where.setdefault(name, set()).add(i)
+    free_rows = set(range(len(rows)))
     pivots: list[tuple[int, str]] = []
     for column in unknowns + others:
-        candidates = [i for i in free_rows if column in rows[i]]
+        candidates = sorted(where.get(column, set()) & free_rows)
         if not candidates:
             continue
         i = next((i for i in candidates if rows[i][column] in (K.one, -K.one)), candidates[0])
@@ -192,16 +209,17 @@ def _solve(
         if scale != K.one:
             inverse = -K.one if scale == -K.one else K.one / scale
             rows[i] = {name: _times(c, inverse, K) for name, c in rows[i].items()}
-        for j, row in enumerate(rows):
-            factor = row.get(column)
-            if j == i or factor is None:
-                continue
+        for j in sorted(where[column] - {i}):
+            row = rows[j]
+            factor = row[column]
             for name, c in rows[i].items():
                 value = row.get(name, K.zero) - _times(factor, c, K)
                 if value == K.zero:
                     row.pop(name, None)
+                    where[name].discard(j)
                 else:
                     row[name] = value
+                    where.setdefault(name, set()).add(j)
         pivots.append((i, column))
     solved: dict[str, Form] = {}
     constraints: list[Form] = []
@@ -234,10 +252,15 @@ def derive(
     constraints: list[Form] = []
     storage = [c for c in graph.components if c.type.role is Role.STORAGE]
     convert = cache(lambda value: held.element(K, value))  # most are 1, -1 and a few values
+
+    @cache
+    def solve(kind: ComponentType, v: PortVariables, outputs: tuple[str, ...]):
+        rows = [{name: convert(c) for name, c in row.items()} for row in kind.relation(v)]
+        return _solve(rows, list(outputs), K)
+
     for component in graph.components:
         v = _port_variables(causal, component, values.get(component.name), signals[component.name])
-        rows = [{name: convert(c) for name, c in row.items()} for row in component.type.relation(v)]
-        solved, free, left = _solve(rows, _outputs(causal, component, v), K)
+        solved, free, left = _solved(component, v, _outputs(causal, component, v), solve)
         explicit.update(solved)
         extra += free
         constraints += left
@@ -253,7 +276,38 @@ def derive(
     return replace(equations, budget=budget)
 
 
-def _substitute(form: Form, resolved: dict[str, Form], K: Domain, skip=frozenset()) -> Form:
+def _solved(component: Component, v: PortVariables, outputs: list[str], solve):
+    """A component's relation solved for the variables it imposes: written in placeholder
+    names and solved once for all the components alike (a thousand equal resistors on a
+    junction are solved once), then renamed."""
+    named = {}
+    template = replace(
+        v,
+        efforts=tuple(named.setdefault(f"e#{i}", e) and f"e#{i}" for i, e in enumerate(v.efforts)),
+        flows=tuple(named.setdefault(f"f#{i}", f) and f"f#{i}" for i, f in enumerate(v.flows)),
+        energy=v.energy and named.setdefault("x#", v.energy) and "x#",
+        rate=v.rate and named.setdefault("dx#", v.rate) and "dx#",
+        signals=tuple(
+            (named.setdefault(f"s#{i}", name) and f"s#{i}", c)
+            for i, (name, c) in enumerate(v.signals)
+        ),
+    )
+    placeholder = {name: key for key, name in named.items()}
+    if len(placeholder) < len(named):  # a variable in two roles (a signal of its own bond)
+        return solve(component.type, v, tuple(outputs))
+    solved, free, left = solve(
+        component.type, template, tuple(placeholder.get(o, o) for o in outputs)
+    )
+    back = lambda name: named.get(name, name)  # noqa: E731
+    rename = lambda form: {back(w): c for w, c in form.items()}  # noqa: E731
+    return (
+        {back(x): rename(form) for x, form in solved.items()},
+        [back(x) for x in free],
+        [rename(form) for form in left],
+    )
+
+
+def _substitute(form: Form, resolved: Mapping[str, Form], K: Domain, skip=frozenset()) -> Form:
     """A form in terms of the base variables (those `resolved` does not give)."""
     total: Form = {}
     for w, c in form.items():
@@ -285,7 +339,9 @@ def _eliminate(explicit: dict[str, Form], K: Domain) -> tuple[dict[str, Form], l
         if len(members) == 1 and not depends.has_edge(members[0], members[0]):
             resolved[members[0]] = _substitute(explicit[members[0]], resolved, K)
             continue
-        # an algebraic loop: v - sum(a_vw w, w in loop) = the rest, solved exactly together
+        if _torn(members, explicit, resolved, K, depends):
+            continue
+        # a degenerate loop: v - sum(a_vw w, w in loop) = the rest, all rows together
         rows = []
         for v in members:
             row = {w: -c for w, c in explicit[v].items() if w in members}
@@ -300,8 +356,60 @@ def _eliminate(explicit: dict[str, Form], K: Domain) -> tuple[dict[str, Form], l
     return resolved, extra, constraints
 
 
+def _tears(members: list[str], depends: nx.DiGraph) -> tuple[list[str], nx.DiGraph]:
+    """A few loop variables that, taken as known, leave no cycle among the others (a
+    feedback vertex set, chosen greedily: in each cycle the variable with the most
+    dependencies both ways), and the dependencies left among the others."""
+    graph = nx.DiGraph(depends.subgraph(members))
+    tears = []
+    while True:
+        cycles = [
+            sorted(c)
+            for c in nx.strongly_connected_components(graph)
+            if len(c) > 1 or graph.has_edge(next(iter(c)), next(iter(c)))
+        ]
+        if not cycles:
+            return tears, graph
+        for cycle in cycles:
+            tear = max(cycle, key=lambda v: graph.in_degree(v) * graph.out_degree(v))
+            tears.append(tear)
+            graph.remove_node(tear)
+
+
+def _torn(members, explicit, resolved, K, depends) -> bool:
+    """Solve an algebraic loop by tearing: every other loop variable in terms of the tear
+    variables (in dependency order, one substitution each), then the few tear variables
+    from their own equations, jointly. A wide junction makes one loop of hundreds of
+    variables with a single tear: the work stays linear in them (a joint solve of all
+    would fill in). False, with nothing resolved, when the tear equations are degenerate.
+    """
+    tears, rest = _tears(members, depends)
+    partial: dict[str, Form] = {}
+    given = ChainMap(partial, resolved)  # the tear variables stay themselves
+    for v in reversed(list(nx.topological_sort(rest))):
+        partial[v] = _substitute(explicit[v], given, K)
+    rows = []
+    for t in tears:
+        row = {w: -c for w, c in _substitute(explicit[t], given, K).items()}
+        row[t] = row.get(t, K.zero) + K.one
+        rows.append({w: c for w, c in row.items() if c != K.zero})
+    solved, free, left = _solve(rows, tears, K)
+    if free or left:
+        return False
+    resolved.update(solved)
+    for v, form in partial.items():
+        resolved[v] = _substitute(form, solved, K)
+    return True
+
+
 def _to_expr(form: Form, K: Domain) -> sympy.Expr:
-    return sympy.Add(*(K.to_sympy(c) * sympy.Symbol(w) for w, c in form.items()))
+    return sympy.Add(*(_to_sympy(K, c) * sympy.Symbol(w) for w, c in form.items()))
+
+
+@cache
+def _to_sympy(K: Domain, c) -> sympy.Expr:
+    """Coefficients recur (1, -1 and the few values of a model): each converted once."""
+    return K.to_sympy(c)
 
 
 def _descriptor(

@@ -55,7 +55,7 @@ class Parametrisation:
     substitution: MappingProxyType  # Symbol -> value, for every assumed parameter
 
     def apply(self, expression: sympy.Expr) -> sympy.Expr:
-        return expression.xreplace(dict(self.substitution))
+        return expression.xreplace(self.substitution)  # a copy would cost every call
 
     @property
     def free(self) -> tuple[str, ...]:
@@ -88,11 +88,18 @@ def parametrise(graph: BondGraph, choice: ParameterChoice) -> Parametrisation:
     if problems:
         raise ModelError(graph.source, problems)
     unknowns = graph.unknowns
+    # --symbolic keeps the parameters given numbers; one given by others (`a = f(b)`, a
+    # subsystem's parameter its parent sets) stays bound to them
+    bound = {
+        name
+        for name, p in graph.parameters.items()
+        if name not in choice.overrides and p.value is not None and p.value.value.free_symbols
+    }
     symbolic = {
         name
         for name, p in graph.parameters.items()
         if (p.value is None and name not in choice.overrides)
-        or choice.symbolic
+        or (choice.symbolic and name not in bound)
         or name in choice.keep
         or name in unknowns
     }

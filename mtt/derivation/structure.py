@@ -51,8 +51,9 @@ def _arrows(causal: CausalBondGraph, component: Component) -> list[tuple[tuple, 
     elif role is Role.STORAGE:  # the state and its rate, both ways (integral or derivative)
         state = [("x", name), ("dx", name)]
         return [(a, b) for a in received + state for b in imposed + state if a != b]
-    elif role is Role.JUNCTION or component.type.name == "TF":
-        return [(a, b) for a in received for b in imposed if a[0] == b[0]]
+    elif role is Role.JUNCTION or component.type.name == "TF":  # efforts to efforts
+        return [(a, b) for kind in "ef" for a in received if a[0] == kind
+                for b in imposed if b[0] == kind]  # fmt: skip
     elif component.type.name == "GY":
         return [(a, b) for a in received for b in imposed if a[0] != b[0]]
     else:  # a resistor: its effort and flow
@@ -113,6 +114,47 @@ def _entering(graph: BondGraph, component: Component, brought: dict) -> set[str]
     return {u for name in names if name in brought for u in brought[name]}
 
 
+ZERO = {
+    "Se": "a zero effort (a source other than the input is set to zero)",
+    "Sf": "a zero flow (a source other than the input is set to zero)",
+    "De": "a zero flow (a detector draws no power)",
+    "Df": "a zero effort (a detector draws no power)",
+}
+
+
+def _unreachable(graph: BondGraph, source: Component, output: Component) -> str:
+    """Why the output does not depend on the input: no chain of bonds between them, or
+    one that causality cuts (a source other than the input, set to zero, or a detector
+    other than the output imposes a zero the junctions between pass on)."""
+    whole = f"the output {output.label} does not depend on the input {source.label}"
+    zero = " (the transfer function is zero)"
+    neighbours = defaultdict(set)
+    for bond in graph.bonds:
+        neighbours[bond.tail].add(bond.head)
+        neighbours[bond.head].add(bond.tail)
+    joined, queue = {source.name}, deque([source.name])
+    while queue:
+        for name in neighbours[queue.popleft()] - joined:
+            joined.add(name)
+            queue.append(name)
+    if output.name not in joined:
+        return (
+            f"{whole}: no chain of bonds and signals leads from one to the other, whatever "
+            f"the parameters{zero}"
+        )
+    zeros = [
+        f"{c.label} imposes {ZERO[c.type.name]}"
+        for c in graph.components
+        if c.name in joined and c.name not in (source.name, output.name) and c.type.name in ZERO
+    ]
+    if not zeros:
+        return f"{whole}: a chain of bonds joins them, but its causal equations carry nothing{zero}"
+    return (
+        f"{whole}: a chain of bonds joins them, but causality cuts it: "
+        f"{'; '.join(zeros)}, and the junctions between pass it on{zero}"
+    )
+
+
 def structure_problems(causal: CausalBondGraph) -> list[Diagnostic]:
     """An output the input cannot reach, and unknowns that cannot reach the output."""
     graph = causal.bondgraph
@@ -121,15 +163,7 @@ def structure_problems(causal: CausalBondGraph) -> list[Diagnostic]:
     output = graph.component(graph.output)
     source = graph.component(graph.input)
     if OUTPUT not in reached:
-        return [
-            error(
-                "unreachable_output",
-                f"the output {output.label} does not depend on the input {source.label}: "
-                "no chain of bonds and signals leads from one to the other, whatever the "
-                "parameters (the transfer function is zero)",
-                output.position,
-            )
-        ]
+        return [error("unreachable_output", _unreachable(graph, source, output), output.position)]
     on_path = reached & (_reached(backward, OUTPUT) | {OUTPUT})
     brought = _unknowns_in(graph)
     entering: set[str] = set()

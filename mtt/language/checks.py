@@ -322,11 +322,16 @@ class FileCheck(SubsystemRules):
                 continue
             if (heads[name] == 1) != usual:
                 way = "out of" if usual else "into"
+                effect = (
+                    "which makes it an active element"
+                    if component.type.role in (Role.STORAGE, Role.RESISTOR)
+                    else "which reverses the sign its variable enters the junctions with (the "
+                    "transfer function changes sign)"
+                )
                 self.warnings.append(
                     warning(
                         "bond_direction",
-                        f"the bond of {component.label} points "
-                        f"{way} it, which makes it an active element",
+                        f"the bond of {component.label} points {way} it, {effect}",
                         component.position,
                         self.origin,
                     )

@@ -276,6 +276,9 @@ class _ToModel(ExpressionRules):
         return self._port(children, "output")
 
 
+_BRACKETED_PORT = re.compile(r"\bSS\s*:\s*\[\s*([A-Za-z_][A-Za-z0-9_]*)\s*\]")
+
+
 def _statements(source: Source) -> tuple[list, list[Diagnostic]]:
     """Every statement of the file, each line parsed on its own, and every syntax error
     (up to `MAX_SYNTAX_ERRORS`)."""
@@ -308,7 +311,15 @@ def _statements(source: Source) -> tuple[list, list[Diagnostic]]:
             tree = parser.parse(line + "\n", start="line")
         except lark.exceptions.UnexpectedInput as exc:
             column = exc.column if exc.line > 0 else len(line) + 1
-            problems.append(error("syntax", _syntax_message(exc, parser), Position(number, column)))
+            message = _syntax_message(exc, parser)
+            bracketed = _BRACKETED_PORT.search(line)
+            if bracketed:  # MTT's own syntax for a port
+                column = bracketed.start() + 1
+                message = (
+                    f"{bracketed.group(0)} is MTT's bracketed port: here a subsystem's port is "
+                    f"written SS:{bracketed.group(1)} (see the language guide, subsystems)"
+                )
+            problems.append(error("syntax", message, Position(number, column)))
             continue
         for item in _ToModel(problems, number).transform(tree).children:
             statements.extend(item if isinstance(item, list) else [item])

@@ -2,6 +2,9 @@
 
 from __future__ import annotations
 
+import keyword
+from collections.abc import Iterable
+
 import sympy
 
 from mtt.derivation.causality import CausalBondGraph
@@ -40,8 +43,69 @@ def _factored(polynomial: sympy.Expr) -> sympy.Expr:
     return sympy.factor(polynomial)
 
 
+def _read_as_symbol(name: str) -> bool:
+    """Whether sympy's parser reads the name as a symbol: not a keyword, nor a name it
+    knows (E is Euler's number, gamma a function, lambda a keyword)."""
+    return not (keyword.iskeyword(name) or name in ("True", "False", "None") or name in _SYMPY)
+
+
+_SYMPY = frozenset(sympy.__all__)
+
+
+def expression_names(names: Iterable[str]) -> dict[str, str]:
+    """How each model name is written in the expressions mtt prints, so that sympy reads
+    them back as the same expression (`sympify`, `parse_expr`): a subsystem's dots as
+    double underscores (motor.jm as motor__jm), and an underscore more at the end of a name
+    sympy would read as something else (gamma_, E_, lambda_) or that is taken."""
+    names = list(names)
+    taken = set(names)
+    written = {}
+    for name in names:
+        alias = name.replace(".", "__")
+        while not _read_as_symbol(alias) or (alias != name and alias in taken):
+            alias += "_"
+        taken.add(alias)
+        written[name] = alias
+    return written
+
+
+class Written:
+    """The expressions of one result as text, each symbol by its `expression_names`."""
+
+    def __init__(self, *expressions: sympy.Expr):
+        symbols = set().union(*(e.free_symbols for e in expressions)) - {LAPLACE}
+        ordered = sorted(symbols, key=lambda x: x.name)
+        self.names = expression_names(x.name for x in ordered)  # model name -> as written
+        self.renaming = {
+            x: sympy.Symbol(self.names[x.name]) for x in ordered if self.names[x.name] != x.name
+        }
+
+    def __call__(self, expression: sympy.Expr) -> sympy.Expr:
+        return expression.xreplace(self.renaming) if self.renaming else expression
+
+    def text(self, expression: sympy.Expr) -> str:
+        return str(self(expression))
+
+    @property
+    def table(self) -> dict[str, str]:
+        """Each symbol as written -> its name in the model (dotted for a subsystem's)."""
+        return {alias: name for name, alias in self.names.items()}
+
+    @property
+    def note(self) -> str | None:
+        renamed = [f"{a} is {n}" for n, a in self.names.items() if a != n]
+        return f"names in the expressions: {', '.join(renamed)}" if renamed else None
+
+
+def appearing(theta: Theta) -> list[str]:
+    """The parameters kept symbolic that the transfer function holds (one that cancels, or
+    that no path from input to output reaches, is not listed)."""
+    held = {x.name for x in theta.num.free_symbols | theta.den.free_symbols}
+    return [name for name in theta.symbols if name in held]
+
+
 def _heading(theta: Theta) -> str:
-    symbols = ", ".join(theta.symbols) or "none"
+    symbols = ", ".join(appearing(theta)) or "none"
     unknowns = f"unknown{'s' * (len(theta.unknowns) > 1)} {', '.join(theta.unknowns) or 'none'}"
     return (
         f"model {theta.model}: from {theta.input} to {theta.output}; {unknowns}; symbolic {symbols}"
@@ -56,15 +120,19 @@ def _assumed(theta: Theta) -> str:
 
 
 def tf_text(theta: Theta) -> str:
+    written = Written(theta.num, theta.den)
+    num, den = written(theta.num), written(theta.den)
     lines = [_heading(theta)]
     if theta.assumed:
         lines.append(_assumed(theta))
+    if written.note:
+        lines.append(written.note)
     lines += [
         "",
-        f"  numerator   (m = {theta.m}):  {in_powers_of_s(theta.num)}",
-        f"  denominator (n = {theta.n}):  {in_powers_of_s(theta.den)}",
+        f"  numerator   (m = {theta.m}):  {in_powers_of_s(num)}",
+        f"  denominator (n = {theta.n}):  {in_powers_of_s(den)}",
         "",
-        f"  G(s) = {_grouped(_factored(theta.num))} / ({_factored(theta.den)})",
+        f"  G(s) = {_grouped(_factored(num))} / ({_factored(den)})",
     ]
     return "\n".join(lines)
 
@@ -92,7 +160,8 @@ def tf_latex(theta: Theta) -> str:
 
 def theta_text(theta: Theta) -> str:
     labels = theta.column_labels
-    cells = [[str(entry) for entry in theta.matrix.row(i)] for i in range(theta.matrix.rows)]
+    written = Written(theta.num, theta.den)
+    cells = [[written.text(e) for e in theta.matrix.row(i)] for i in range(theta.matrix.rows)]
     rows = [["", *labels]] + [
         [label, *row] for label, row in zip(theta.row_labels, cells, strict=True)
     ]
@@ -101,6 +170,8 @@ def theta_text(theta: Theta) -> str:
     lines = [_heading(theta)]
     if theta.assumed:
         lines.append(_assumed(theta))
+    if written.note:
+        lines.append(written.note)
     lines += [
         f"Theta: n = {theta.n}, m = {theta.m}, {_degrees(theta)}; rows "
         f"{theta.row_labels[0]}..{theta.row_labels[theta.n]}, "
@@ -125,6 +196,7 @@ def theta_latex(theta: Theta) -> str:
 
 def derived_json(theta: Theta, order: int) -> dict:
     """The `tf --json` / `theta --json` record (its shape is a public contract)."""
+    written = Written(theta.num, theta.den)
     return {
         "ok": True,
         "model": theta.model,
@@ -134,32 +206,46 @@ def derived_json(theta: Theta, order: int) -> dict:
         "unknowns": list(theta.unknowns),
         "monomials": [list(monomial) for monomial in theta.monomials],
         "degrees": theta.degrees,
-        "symbols": list(theta.symbols),
-        "num": str(theta.num),
-        "den": str(theta.den),
+        "symbols": appearing(theta),
+        "names": written.table,
+        "num": written.text(theta.num),
+        "den": written.text(theta.den),
         "n": theta.n,
         "m": theta.m,
         "N": theta.N,
-        "theta": [[str(e) for e in theta.matrix.row(i)] for i in range(theta.matrix.rows)],
+        "theta": [[written.text(e) for e in theta.matrix.row(i)] for i in range(theta.matrix.rows)],
         "order": order,
     }
 
 
+def _written_equations(equations: Equations) -> Written:
+    matrices = equations.matrices().values()
+    states = (sympy.Symbol(x) for x in equations.states)
+    return Written(*(e for _, e in equations.relations), *matrices, *states)
+
+
 def ss_text(equations: Equations) -> str:
     graph = equations.causal.bondgraph
+    written = _written_equations(equations)
     lines = [
         f"model {graph.name}: causal equations (bond variables e<n>, f<n>; "
         "u input, y output; d<x> is dx/dt)"
     ]
-    lines += [f"  {name} = {expression}" for name, expression in equations.relations]
+    if written.note:
+        lines.append(written.note)
+    lines += [
+        f"  {written.names.get(name, name)} = {written.text(expression)}"
+        for name, expression in equations.relations
+    ]
     lines += [
         "",
         "descriptor form E x' = A x + B u, y = C x + D u",
-        f"  x = [{', '.join(equations.states)}]",
+        f"  x = [{', '.join(written.names.get(x, x) for x in equations.states)}]",
     ]
     for name, matrix in equations.matrices().items():
         lines += ["", f"{name} ="]
-        lines += ["  " + line for line in sympy.pretty(matrix, use_unicode=False).splitlines()]
+        pretty = sympy.pretty(written(matrix), use_unicode=False)
+        lines += ["  " + line for line in pretty.splitlines()]
     return "\n".join(lines)
 
 
@@ -231,8 +317,9 @@ def ss_json(equations: Equations) -> dict:
     """The `ss --json` record: every entry an exact expression, as text."""
     graph = equations.causal.bondgraph
     params = equations.parametrisation
+    written = _written_equations(equations)
     matrices = {
-        name: [[str(entry) for entry in matrix.row(i)] for i in range(matrix.rows)]
+        name: [[written.text(entry) for entry in matrix.row(i)] for i in range(matrix.rows)]
         for name, matrix in equations.matrices().items()
     }
     return {
@@ -242,8 +329,12 @@ def ss_json(equations: Equations) -> dict:
         "output": graph.component(graph.output).label,
         "unknowns": list(params.unknowns),
         "symbols": list(params.symbols),
-        "relations": [[name, str(expression)] for name, expression in equations.relations],
-        "states": list(equations.states),
+        "names": written.table,
+        "relations": [
+            [written.names.get(name, name), written.text(expression)]
+            for name, expression in equations.relations
+        ],
+        "states": [written.names.get(x, x) for x in equations.states],
         **matrices,
     }
 
