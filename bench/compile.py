@@ -2,6 +2,7 @@
 
 Run: .venv/bin/python bench/compile.py [--sizes 5 10 20 40] [--stages 10 20 40 80 160]
                                        [--baseline-max 40] [--repeat 3]
+                                       [--symbolic 4 6 8 10 12] [--abcd-max 8] [--wide]
 
 Prints, per model, the best wall time of each stage (text -> parse tree -> bond graph ->
 causal bond graph -> equations -> transfer function -> Theta), their total, and the total
@@ -11,8 +12,16 @@ assembled from one section file used as a subsystem (--stages). Baselines, in th
 process: the transfer stage done the textbook way (sympy Matrix inverse and cancel) for
 small models, and by fraction-free elimination over the polynomials (the transfer stage
 before it evaluated and interpolated the determinants) for the assembled ladders up to
---baseline-max sections. Then the growth exponent of the total time with the number of
-sections (the slope of log time against log size).
+--baseline-max sections (now the sparse fraction-free elimination the transfer stage
+falls back to for many symbols). Then the growth exponent of the total time with the
+number of sections (the slope of log time against log size).
+
+--symbolic (issue 23): RC ladders with every parameter symbolic, derived to the transfer
+function and to Theta (budget raised to 200000 terms), against the plain sympy product of
+the sections' ABCD matrices (each product expanded, then k / (A k + B)) in the same
+process up to --abcd-max sections, checked equal to it exactly; the growth exponent of
+the time against the size of the result (terms). --wide: a 0-junction with 200 parallel
+resistors (an algebraic loop of 400 variables) and 1000 instances of a one-bond part.
 """
 
 from __future__ import annotations
@@ -27,6 +36,7 @@ from pathlib import Path
 import sympy
 
 from mtt.derivation import determinants
+from mtt.derivation.budget import Budget
 from mtt.derivation.causality import assign
 from mtt.derivation.equations import derive
 from mtt.derivation.parameters import ParameterChoice, parametrise
@@ -153,13 +163,112 @@ def growth(results: dict[str, dict[str, float]], sizes: list[int], label: str) -
         print(f"  fitted over {sizes[0]}..{sizes[-1]}: time ~ N^{slope:.2f}")
 
 
+def symbolic_ladder(sections: int) -> str:
+    lines = ["model sladder", "unknown k"]
+    lines += [f"param {kind}{i}" for i in range(1, sections + 1) for kind in "rc"]
+    lines.append("Se:v -> 1:s1")
+    for i in range(1, sections + 1):
+        lines += [f"1:s{i} -> R:r{i}(r{i})", f"1:s{i} -> 0:n{i}", f"0:n{i} -> C:c{i}(c{i})"]
+        lines += [f"0:n{i} -> 1:s{i + 1}"] if i < sections else []
+    lines += [f"0:n{sections} -> R:load(k)", f"0:n{sections} -> De:out"]
+    return "\n".join(lines) + "\n"
+
+
+def abcd(sections: int):
+    """The plain sympy way: the product of the sections' ABCD matrices, expanded at each
+    step, and V_out / V_in = k / (A k + B) for the load k; (numerator, denominator)."""
+    s, k = sympy.symbols("s k")
+    chain = sympy.eye(2)
+    for i in range(1, sections + 1):
+        r, c = sympy.symbols(f"r{i} c{i}")
+        chain = (
+            chain * sympy.Matrix([[1, r], [0, 1]]) * sympy.Matrix([[1, 0], [c * s, 1]])
+        ).expand()
+    return k, sympy.expand(chain[0, 0] * k + chain[0, 1])
+
+
+def derive_symbolic(path: Path, budget: Budget) -> dict[str, float]:
+    timings: dict[str, float] = {}
+    start = time.perf_counter()
+    graph = build(parse(read_source(path)))
+    equations = derive(assign(graph), parametrise(graph, ParameterChoice()), budget)
+    tf = transfer_function(equations)
+    timings["transfer"] = time.perf_counter() - start
+    start = time.perf_counter()
+    theta = theta_matrix(tf)
+    timings["theta"] = time.perf_counter() - start
+    timings["total"] = timings["transfer"] + timings["theta"]
+    return timings, tf, theta
+
+
+def symbolic_table(sizes: list[int], abcd_max: int) -> None:
+    budget = Budget(max_terms=200_000)
+    rows = []
+    print("\nfully symbolic RC ladders (every r_i, c_i and the load k symbolic), seconds:")
+    print(f"{'sections':>9}{'terms':>9}{'transfer':>10}{'theta':>9}{'total':>9}"
+          f"{'ABCD':>9}{'total/ABCD':>11}  exact")  # fmt: skip
+    with tempfile.TemporaryDirectory() as tmp:
+        for n in sizes:
+            path = Path(tmp) / f"sladder{n}.bg"
+            path.write_text(symbolic_ladder(n), encoding="utf-8")
+            timings, tf, theta = derive_symbolic(path, budget)
+            terms = len(tf.num) + len(tf.den)
+            cells = f"{n:>9}{terms:>9}{timings['transfer']:>10.3f}{timings['theta']:>9.3f}"
+            cells += f"{timings['total']:>9.3f}"
+            if n <= abcd_max:
+                start = time.perf_counter()
+                num, den = abcd(n)
+                product = time.perf_counter() - start
+                same = sympy.expand(theta.num * den - theta.den * num) == 0
+                ratio = timings["total"] / product
+                cells += f"{product:>9.3f}{ratio:>10.3f}x  {'yes' if same else 'NO'}"
+            print(cells)
+            rows.append((terms, timings["total"]))
+    if len(rows) > 2:
+        xs = [math.log(t) for t, _ in rows]
+        ys = [math.log(s) for _, s in rows]
+        mx, my = sum(xs) / len(xs), sum(ys) / len(ys)
+        slope = sum((x - mx) * (y - my) for x, y in zip(xs, ys, strict=True)) / sum(
+            (x - mx) ** 2 for x in xs
+        )
+        print(f"  growth: total time ~ terms^{slope:.2f} (terms of the result, over the rows)")
+
+
+def wide_table() -> None:
+    """One junction, many bonds: an algebraic loop of hundreds of variables, and a thousand
+    subsystems of one bond."""
+    print("\nwide junctions, seconds (derivation to Theta; target < 2 s each):")
+    with tempfile.TemporaryDirectory() as tmp:
+        lines = ["model wide", "unknown k = 2", "param r = 3", "Se:v -> 1:s", "1:s -> I:l(k)"]
+        lines += ["1:s -> 0:n", *(f"0:n -> R:r{i}(r)" for i in range(200)), "0:n -> De:out"]
+        (Path(tmp) / "wide.bg").write_text("\n".join(lines) + "\n", encoding="utf-8")
+        (Path(tmp) / "part.bg").write_text("model part\nparam r = 1\nSS:in -> R:r(r)\n")
+        lines = ["model many", "unknown k = 2"]
+        lines += [f'subsystem p{i} = "part.bg"' for i in range(1000)]
+        lines += ["Se:v -> 1:s", "1:s -> I:l(k)", "1:s -> 0:n"]
+        lines += [f"0:n -> p{i}.in" for i in range(1000)] + ["0:n -> De:out"]
+        (Path(tmp) / "many.bg").write_text("\n".join(lines) + "\n", encoding="utf-8")
+        for name, label in (("wide", "200 parallel resistors"), ("many", "1000 one-bond parts")):
+            start = time.perf_counter()
+            _, _, theta = derive_symbolic(Path(tmp) / f"{name}.bg", Budget())
+            took = time.perf_counter() - start
+            print(f"  {label:<24}{took:>8.2f} s   G(s) = {theta.num} / ({theta.den})")
+
+
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--sizes", type=int, nargs="+", default=[5, 10, 20, 40])
     parser.add_argument("--stages", type=int, nargs="+", default=[10, 20, 40, 80, 160])
     parser.add_argument("--baseline-max", type=int, default=40)
     parser.add_argument("--repeat", type=int, default=3)
+    parser.add_argument("--symbolic", type=int, nargs="*", default=[4, 6, 8, 10, 12])
+    parser.add_argument("--abcd-max", type=int, default=8)
+    parser.add_argument("--wide", action="store_true", help="also the wide junctions")
     args = parser.parse_args()
+    if args.symbolic:
+        symbolic_table(args.symbolic, args.abcd_max)
+    if args.wide:
+        wide_table()
 
     cases = [
         ("dc_drive", ROOT / "models" / "dc_drive.bg", ParameterChoice()),

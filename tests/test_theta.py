@@ -173,7 +173,7 @@ def test_json_record_shape():
     record = derived_json(theta, order=4)
     assert list(record) == [
         "ok", "model", "input", "output", "unknown", "unknowns", "monomials", "degrees", "symbols",
-        "num", "den", "n", "m", "N", "theta", "order",
+        "names", "num", "den", "n", "m", "N", "theta", "order",
     ]  # fmt: skip
     assert record["theta"][0] == ["10", "0"]
     assert record["num"] == "10*k*s**2 + 10"

@@ -14,7 +14,7 @@ from mtt.api.exact import exact
 from mtt.api.results import Causality, StateSpace, Theta, TransferFunction
 from mtt.derivation import pipeline
 from mtt.derivation import theta as derived
-from mtt.derivation.budget import DEFAULT_BUDGET, Budget
+from mtt.derivation.budget import chosen_budget
 from mtt.derivation.causality import assign
 from mtt.derivation.equations import Equations
 from mtt.derivation.identifiability import Identifiability, identifiability
@@ -110,17 +110,13 @@ def load(
         raise MttError(f"set takes a dict {{name: value}}, not {set!r}", kind="bad_value")
     overrides = {name: exact(name, value) for name, value in (set or {}).items()}
     chosen = _names("unknowns", unknowns)
-    if max_terms is not None and (
-        not isinstance(max_terms, int) or isinstance(max_terms, bool) or max_terms < 1
-    ):
-        raise MttError(f"max_terms takes a positive integer, not {max_terms!r}", kind="bad_value")
     choice = ParameterChoice(
         unknowns=chosen or None,
         keep=frozenset(_names("keep", keep)),
         overrides=MappingProxyType(overrides),
         input=_component("input", input),
         output=_component("output", output),
-        budget=DEFAULT_BUDGET if max_terms is None else Budget(max_terms),
+        budget=chosen_budget(max_terms),
     )
     source = _source(path_or_text)
     graph = build(parse(source), choice.selection)

@@ -18,7 +18,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 from mtt.language.bondgraph import BondGraph
-from mtt.language.diagnostics import ModelError, error
+from mtt.language.diagnostics import ModelError, MttError, error
 
 # A polynomial of 20000 terms in some 20 variables takes some 20 MB as sympy's polynomial,
 # ten times that as a sympy expression, and a millisecond a term to write out as one and
@@ -86,6 +86,15 @@ class Meter:
         product = a * b
         self.hold(len(product))
         return product
+
+
+def chosen_budget(max_terms: object) -> Budget:
+    """The budget of `max_terms` as a caller gives it (None: the default)."""
+    if max_terms is None:
+        return DEFAULT_BUDGET
+    if not isinstance(max_terms, int) or isinstance(max_terms, bool) or max_terms < 1:
+        raise MttError(f"max_terms takes a positive integer, not {max_terms!r}", kind="bad_value")
+    return Budget(max_terms)
 
 
 def refusal(graph: BondGraph, symbols: tuple[str, ...], stop: TooLarge) -> ModelError:

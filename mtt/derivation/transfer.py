@@ -16,6 +16,7 @@ from math import gcd
 
 import sympy
 from sympy.polys.domains import ZZ
+from sympy.polys.matrices import DomainMatrix
 from sympy.polys.rings import PolyElement
 
 from mtt.derivation import constants
@@ -67,6 +68,31 @@ def _field(equations: Equations):
     return (ZZ if ground.is_QQ else ground).frac_field(*gens), gens
 
 
+def _lifter(equations: Equations, F):
+    """Matrices of the equations as matrices over F. Over Q(symbols), each fraction's
+    exponents get s's in front and its rational coefficients are cleared: sympy's own
+    conversion reorders every monomial through a generic path, a third of a second an
+    entry with a few hundred symbols."""
+    K = equations.domain
+    if not (K.is_FractionField and K.domain.is_QQ):
+        return lambda M: M.to_sparse().convert_to(F)
+    ring = F.field.ring
+
+    def element(fraction):
+        terms = [*fraction.numer.iterterms(), *fraction.denom.iterterms()]
+        scale = math.lcm(*(int(c.denominator) for _, c in terms))
+        shifted = lambda poly: ring.from_dict(  # noqa: E731
+            {(0, *m): int(c.numerator) * (scale // int(c.denominator)) for m, c in poly.iterterms()}
+        )
+        return F.field.raw_new(shifted(fraction.numer), shifted(fraction.denom))
+
+    def lift(M):
+        rows = {i: {j: element(v) for j, v in row.items()} for i, row in M.to_sdm().items()}
+        return DomainMatrix(rows, M.shape, F)
+
+    return lift
+
+
 def _singular(equations: Equations, why: str) -> ModelError:
     return ModelError(
         equations.causal.bondgraph.source,
@@ -93,7 +119,7 @@ def _transfer_function(equations: Equations, meter: Meter) -> TransferFunction:
     from mtt.derivation import determinants as evaluation  # numpy
 
     F, gens = _field(equations)
-    lift = lambda M: M.to_sparse().convert_to(F)  # noqa: E731
+    lift = _lifter(equations, F)
     D = lift(equations.D)[0, 0].element
     num, den = D.numer, D.denom
     size = len(equations.states)
