@@ -38,6 +38,14 @@ def drawn(path: Path):
     return graph, drawing.picture(graph, None if graph.open_ports else assign(graph))
 
 
+def drawn_text(directory: Path, text: str) -> tuple:
+    """A model written to `directory` and drawn with its causal strokes."""
+    path = directory / "model.bg"
+    path.write_text(text)
+    graph = load(path)
+    return graph, drawing.picture(graph, assign(graph))
+
+
 def kinds(path: Path, *wanted: str) -> list[str]:
     return [str(p) for p in problems(drawn(path)[1]) if p.kind in wanted]
 
@@ -70,11 +78,8 @@ def test_everything_is_inside_the_picture(path):
 
 
 def test_a_long_title_widens_a_small_picture(tmp_path):
-    model = tmp_path / "small.bg"
-    model.write_text(
-        'model small "' + "a description longer than the bond graph " * 3 + '"\nSe:a -> De:b\n'
-    )
-    picture = drawing.picture(load(model))
+    long = "a description longer than the bond graph " * 3
+    _, picture = drawn_text(tmp_path, f'model small "{long}"\nSe:a -> De:b\n')
     centre, half = picture.title.box
     assert centre[0] + half[0] <= picture.upper[0] and centre[0] - half[0] > picture.lower[0]
     assert picture.upper[0] - picture.lower[0] > 2 * half[0]
@@ -228,10 +233,8 @@ def test_subsystems_are_boxes_around_their_members_named_as_in_their_file():
 
 
 def test_bonds_between_the_same_two_components_are_drawn_apart(tmp_path):
-    model = tmp_path / "twice.bg"
-    model.write_text("model twice\nSe:a -> 0:n\n0:n -> 1:j\n0:n -> 1:j\n1:j -> De:v\n")
-    graph = load(model)
-    picture = drawing.picture(graph, assign(graph))
+    text = "model twice\nSe:a -> 0:n\n0:n -> 1:j\n0:n -> 1:j\n1:j -> De:v\n"
+    _, picture = drawn_text(tmp_path, text)
     second, third = picture.bonds[1], picture.bonds[2]
     assert np.linalg.norm(second.path.mean(axis=0) - third.path.mean(axis=0)) > 0.1
     assert problems(picture) == []
@@ -295,13 +298,11 @@ def test_a_causal_conflict_inside_a_part_is_found_by_check(tmp_path, capsys):
 def test_a_bond_within_a_layer_is_moved_on_and_bonds_fan_out(tmp_path):
     # 1:b is one bond from 0:a directly and two through GY:g: laid out by distance alone,
     # GY:g and 1:b shared a layer and their bond ran through what hangs on 1:b
-    model = tmp_path / "triangle.bg"
-    model.write_text(
+    graph, picture = drawn_text(
+        tmp_path,
         "model triangle\nSe:u -> 0:a\n0:a -> 1:b\n0:a -> GY:g(2) -> 1:b\n"
-        "1:b -> R:r(1)\n1:b -> C:c(1)\nMSe:m(2*e(a)) -> 1:b\n1:b -> Df:y\n"
+        "1:b -> R:r(1)\n1:b -> C:c(1)\nMSe:m(2*e(a)) -> 1:b\n1:b -> Df:y\n",
     )
-    graph = load(model)
-    picture = drawing.picture(graph, assign(graph))
     assert problems(picture) == []
     x = {name: label.centre[0] for name, label in picture.labels.items()}
     assert x["u"] < x["a"] < x["g"] < x["b"] < x["y"]  # the two-port in the chain
@@ -315,13 +316,11 @@ def test_a_bond_within_a_layer_is_moved_on_and_bonds_fan_out(tmp_path):
 
 def test_a_signal_that_reads_a_subsystems_port_starts_at_the_bond_it_became(tmp_path):
     (tmp_path / "stage.bg").write_text((SUBSYSTEMS / "parts" / "stage.bg").read_text())
-    model = tmp_path / "fed.bg"
-    model.write_text(
+    graph, picture = drawn_text(
+        tmp_path,
         'model fed\nsubsystem s1 = "stage.bg"\nSe:v -> s1.in\ns1.out -> 1:j\n'
-        "1:j -> R:r(1)\nMSe:m(2*e(s1.out)) -> 1:j\n1:j -> Df:y\n"
+        "1:j -> R:r(1)\nMSe:m(2*e(s1.out)) -> 1:j\n1:j -> Df:y\n",
     )
-    graph = load(model)
-    picture = drawing.picture(graph, assign(graph))
     assert problems(picture) == []
     (arrow,) = picture.signals
     bond = next(b for b in picture.bonds if b.number == graph.port_bonds["s1.out"])
@@ -331,13 +330,11 @@ def test_a_signal_that_reads_a_subsystems_port_starts_at_the_bond_it_became(tmp_
 def test_a_piece_that_only_a_signal_reaches_follows_it_to_the_right(tmp_path):
     # two tanks: the lower is fed by a modulated source that reads the upper's outflow,
     # with no bond between them (issue 19's two_tanks has this shape)
-    model = tmp_path / "tanks.bg"
-    model.write_text(
+    graph, picture = drawn_text(
+        tmp_path,
         "model tanks\nSf:pump -> 0:h1\n0:h1 -> C:c1(1)\n0:h1 -> R:o1(1)\n"
-        "MSf:fall(f(o1)) -> 0:h2\n0:h2 -> C:c2(1)\n0:h2 -> R:o2(1)\n0:h2 -> De:level\n"
+        "MSf:fall(f(o1)) -> 0:h2\n0:h2 -> C:c2(1)\n0:h2 -> R:o2(1)\n0:h2 -> De:level\n",
     )
-    graph = load(model)
-    picture = drawing.picture(graph, assign(graph))
     assert problems(picture) == []
     x = {name: label.centre[0] for name, label in picture.labels.items()}
     assert x["pump"] < x["h1"] < x["o1"] < x["h2"] < x["level"]
