@@ -381,3 +381,25 @@ def test_latex_spaces_its_factors_and_sets_long_names_as_one_symbol():
     )
     latex = model.transfer_function._repr_latex_()
     assert "\\mathit{mass}\\,s" in latex and "mass s" not in latex
+
+
+def test_a_fit_prints_as_the_command_line_does_and_shows_as_a_table():
+    rlc = mtt.load(mtt.example("rlc"))
+    t = np.linspace(0.0, 10.0, 501)
+    u = rlc.estimator().input_signal("prbs", t, period=0.2)
+    y = (
+        rlc.with_noise(rlc.simulate(t, u, hold="zoh"), 30)
+        if hasattr(rlc, "with_noise")
+        else (rlc.estimator().with_noise(rlc.simulate(t, u, hold="zoh"), 30))
+    )
+    found = rlc.fit(t, u, y, hold="zoh")
+    lines = str(found).splitlines()
+    assert lines[0] == "rlc: 501 samples" and found.summary() == str(found)
+    assert lines[1].startswith(f"  c = {found.k:.6g} \u00b1 {found.k_se:.3g} (standard error")
+    html = found._repr_html_()
+    assert "<table>" in html and f"<td>{found.k:.6g}</td>" in html
+    assert found.ok and found.result.k == found.k  # every attribute of the module's Fit
+    both = rlc.fit([t, t], [u, u], [y, y], hold="zoh")
+    assert str(both).startswith("rlc: 501 samples; 501 samples")
+    with pytest.raises(mtt.MttError, match="unexpected parameter 'holds'"):
+        rlc.fit(t, u, y, holds="zoh")  # a misspelt keyword is not a kept parameter either

@@ -8,6 +8,7 @@ from pathlib import Path
 import pytest
 
 import mtt
+import mtt.api.loading
 import mtt.api.model
 import mtt.api.results
 
@@ -15,7 +16,9 @@ ROOT = Path(__file__).resolve().parent.parent
 OPTIONS = doctest.ELLIPSIS | doctest.NORMALIZE_WHITESPACE
 
 
-@pytest.mark.parametrize("module", [mtt, mtt.api.model, mtt.api.results], ids=lambda m: m.__name__)
+@pytest.mark.parametrize(
+    "module", [mtt, mtt.api.loading, mtt.api.model, mtt.api.results], ids=lambda m: m.__name__
+)
 def test_docstring_examples(module):
     results = doctest.testmod(module, optionflags=OPTIONS)
     assert results.attempted > 0

@@ -87,3 +87,14 @@ def test_a_spreadsheet_s_semicolons_or_tabs_are_read_and_a_missing_column_says_c
     )
     assert as_options(caught.value).endswith("output with --columns T,U,Y (now t,u,y)")
     assert records.read(rlc, str(wrong), ("time", "volts", "speed")).t.tolist() == [0, 1]
+
+
+def test_the_api_reads_a_record_through_mtt_data(tmp_path):
+    model = mtt.load(mtt.example("rlc"))
+    path = tmp_path / "run.csv"
+    path.write_text("time;volts;amps\n0;1;0\n0.5;1;0.25\n1;1;0.5\n")
+    record = model.read_csv(path, columns="time,volts,amps")
+    assert record.y.tolist() == [0, 0.25, 0.5] and record.note == f"3 samples from {path}"
+    with pytest.raises(mtt.MttError, match="no column 't'") as caught:
+        model.read_csv(path)
+    assert caught.value.kind == "bad_argument" and caught.value.file == str(path)

@@ -3,7 +3,8 @@
 See docs/api.md. Everything here is also `mtt.NAME`.
 """
 
-from mtt.api.model import Model, example, load
+from mtt.api.loading import example, load
+from mtt.api.model import Model
 from mtt.api.results import Causality, StateSpace, Theta, TransferFunction
 from mtt.derivation.identifiability import Identifiability
 from mtt.language.diagnostics import MttError

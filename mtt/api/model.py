@@ -1,127 +1,31 @@
-"""`mtt.load`: a model file (or its text) in, a `Model` out, whose attributes are the stages
-of the derivation chain, each derived once, when first asked for."""
+"""A checked model (`Model`), whose attributes are the stages of the derivation chain, each
+derived once, when first asked for (`mtt.load` makes one: mtt/api/loading.py)."""
 
 from __future__ import annotations
 
-from collections.abc import Iterable, Mapping
+import math
 from dataclasses import dataclass
 from functools import cached_property
 from pathlib import Path
-from types import MappingProxyType, ModuleType
+from types import ModuleType
+
+import numpy as np
 
 from mtt.api import systems
-from mtt.api.exact import exact
+from mtt.api.fits import Fit
 from mtt.api.results import Causality, StateSpace, Theta, TransferFunction
+from mtt.data import records
+from mtt.data.records import Record
 from mtt.derivation import pipeline
 from mtt.derivation import theta as derived
-from mtt.derivation.budget import chosen_budget
 from mtt.derivation.causality import assign
 from mtt.derivation.equations import Equations
 from mtt.derivation.identifiability import Identifiability, identifiability
-from mtt.derivation.parameters import ParameterChoice, parametrise
+from mtt.derivation.parameters import ParameterChoice
 from mtt.derivation.transfer import transfer_function
 from mtt.estimator import codegen
-from mtt.language.bondgraph import BondGraph, build
+from mtt.language.bondgraph import BondGraph
 from mtt.language.diagnostics import MttError, Source
-from mtt.language.parse import parse
-from mtt.resources import resource_dir
-
-TEXT_NAME = "<string>"  # how errors name a model given as text
-
-
-def example(name: str) -> Path:
-    """The path of an example model shipped with mtt (`mtt examples` lists them).
-
-    >>> import mtt
-    >>> mtt.example("dc_drive").name
-    'dc_drive.bg'
-    """
-    path = resource_dir("models") / f"{name}.bg"
-    if not path.is_file():
-        names = ", ".join(sorted(p.stem for p in resource_dir("models").glob("*.bg")))
-        raise MttError(f"no example model {name!r} (examples: {names})", kind="io")
-    return path
-
-
-def _source(path_or_text: str | Path) -> Source:
-    if isinstance(path_or_text, str) and "\n" in path_or_text:
-        return Source(TEXT_NAME, path_or_text.removeprefix("\ufeff"))
-    if isinstance(path_or_text, str | Path):
-        return pipeline.read_source(path_or_text)
-    raise MttError(
-        f"expected a file name or model text, not {type(path_or_text).__name__}", kind="bad_value"
-    )
-
-
-def _names(option: str, value: str | Iterable[str] | None) -> tuple[str, ...]:
-    if value is None:
-        return ()
-    names = value.split(",") if isinstance(value, str) else value
-    if not isinstance(names, Iterable) or not all(isinstance(name, str) for name in names):
-        raise MttError(f"{option} takes parameter names, not {value!r}", kind="bad_value")
-    return tuple(name.strip() for name in names if name.strip())
-
-
-def _component(option: str, value: object) -> str | None:
-    if value is None or isinstance(value, str):
-        return value
-    raise MttError(f"{option} takes a component TYPE:NAME, not {value!r}", kind="bad_value")
-
-
-def load(
-    path_or_text: str | Path,
-    *,
-    unknowns: str | Iterable[str] | None = None,
-    input: str | None = None,
-    output: str | None = None,
-    set: Mapping[str, object] | None = None,
-    keep: str | Iterable[str] | None = None,
-    max_terms: int | None = None,
-) -> Model:
-    """Read and check a model: a file name (str or Path), or the model's text itself (a str
-    with a line break). Raise `MttError` for anything wrong in it.
-
-    unknowns: the parameters to identify, instead of those the model declares `unknown`
-        (names, or "a,b"); with several, the estimator's k is a vector in that order.
-    input, output: the source and the detector (TYPE:NAME), over the model's `input` and
-        `output` statements.
-    set: values replacing the file's, {name: number or exact expression text}.
-    keep: parameters kept symbolic instead of substituted (names, or "a,b").
-    max_terms: the most terms a polynomial of the derivation may have (default 20000);
-        beyond, deriving raises MttError too_large instead of growing without bound.
-
-    >>> import mtt
-    >>> model = mtt.load('''
-    ... model rc "a first-order low-pass filter"
-    ... param r = 1000
-    ... unknown c = 1e-6
-    ... Se:v -> 1:loop
-    ... 1:loop -> R:r
-    ... 1:loop -> 0:out
-    ... 0:out -> C:c
-    ... 0:out -> De:vc
-    ... ''')
-    >>> model.transfer_function.expr
-    1/(1000*c*s + 1)
-    >>> mtt.load(model.source.text, set={"r": 2000}).transfer_function.expr
-    1/(2000*c*s + 1)
-    """
-    if set is not None and not isinstance(set, Mapping):
-        raise MttError(f"set takes a dict {{name: value}}, not {set!r}", kind="bad_value")
-    overrides = {name: exact(name, value) for name, value in (set or {}).items()}
-    chosen = _names("unknowns", unknowns)
-    choice = ParameterChoice(
-        unknowns=chosen or None,
-        keep=frozenset(_names("keep", keep)),
-        overrides=MappingProxyType(overrides),
-        input=_component("input", input),
-        output=_component("output", output),
-        budget=chosen_budget(max_terms),
-    )
-    source = _source(path_or_text)
-    graph = build(parse(source), choice.selection)
-    parametrise(graph, choice)  # names in set= and keep= are checked now, not at first use
-    return Model(graph, choice)
 
 
 @dataclass(frozen=True, eq=False)
@@ -344,9 +248,23 @@ class Model:
             )
         return _delegate(module.simulate, t, u, k, **options)
 
-    def estimate(self, t, u, y, **options):
-        """The generated module's recursive `estimate(t, u, y, *, k0, ...)` -> Estimate: the
-        paper's estimate at every sample, from k0.
+    def read_csv(self, path: str | Path, *, columns=("t", "u", "y")) -> Record:
+        """A measured record (mtt.data): the columns `columns` (time, input, output; "T,U,Y"
+        or three names) of a CSV file, comma-, semicolon- or tab-separated, its times
+        increasing strictly; `record.t`, `.u`, `.y` go to `fit` and `estimate`."""
+        try:
+            return records.read(self._estimator, str(path), records.columns(columns))
+        except (OSError, ValueError) as exc:
+            raise MttError(str(exc), kind="bad_argument", file=str(path)) from None
+
+    def estimate(
+        self, t, u, y, *, k0, beta: float = 0.1, S0: float = 1e-4, C=None, hold: str = "linear",
+        engine: str = "moments", bounds=None, method: str = "RK23", rtol: float = 1e-6,
+        atol: float = 1e-9, max_step: float = math.inf, progress=None, **known: float,
+    ):  # fmt: skip
+        """The generated module's recursive `estimate` -> Estimate: the paper's estimate at
+        every sample, from k0 (the module's docstring says what each keyword does; `known`:
+        values of the parameters kept symbolic).
 
         >>> import mtt, numpy as np
         >>> rlc = mtt.load(mtt.example("rlc"))
@@ -356,12 +274,19 @@ class Model:
         >>> run.khat.shape, float(run.khat[0]), round(run.k, 4)  # k: the last of khat
         ((1001,), 0.5, 0.1)
         """
-        return _delegate(self._estimator.estimate, t, u, y, **options)
+        options = dict(k0=k0, beta=beta, S0=S0, C=C, hold=hold, engine=engine, bounds=bounds,
+                       method=method, rtol=rtol, atol=atol, max_step=max_step,
+                       progress=progress)  # fmt: skip
+        return _delegate(self._estimator.estimate, t, u, y, **options, **known)
 
-    def fit(self, t, u, y, **options):
-        """The generated module's batch `fit(t, u, y, *, method="iv", C="auto", bounds,
-        offset, initial_state, hold, ...)` -> Fit: k over whole records (lists of arrays for
-        several), unbiased under output noise, with k_se, ci, fit_percent and warnings.
+    def fit(
+        self, t, u, y, *, method: str = "iv", C="auto", k0=None, bounds=None,
+        offset: bool = True, initial_state: bool = True, hold: str = "linear",
+        beta: float = 0.0, uncertainty: bool = True, **known: float,
+    ) -> Fit:  # fmt: skip
+        """The generated module's batch `fit` -> Fit: k over whole records (lists of arrays
+        for several), unbiased under output noise, with k_se, ci, fit_percent and warnings;
+        it prints as `mtt fit` does (`summary()`) and shows as a table in Jupyter.
 
         >>> import mtt, numpy as np
         >>> rlc = mtt.load(mtt.example("rlc"))
@@ -370,8 +295,15 @@ class Model:
         >>> found = rlc.fit(t, u, rlc.simulate(t, u), offset=False, initial_state=False)
         >>> found.ok, round(found.k, 6), bool(found.k_se < 1e-6), found.ci[1] - found.ci[0] > 0
         (True, 0.1, True, True)
+        >>> print(found.summary().splitlines()[0])
+        rlc: 1001 samples
         """
-        return _delegate(self._estimator.fit, t, u, y, **options)
+        options = dict(method=method, C=C, k0=k0, bounds=bounds, offset=offset,
+                       initial_state=initial_state, hold=hold, beta=beta,
+                       uncertainty=uncertainty)  # fmt: skip
+        result = _delegate(self._estimator.fit, t, u, y, **options, **known)
+        records = [t] if np.ndim(t[0]) == 0 else t  # one record, or a list of them
+        return Fit(result, self._estimator, tuple(f"{np.size(r)} samples" for r in records))
 
     def compare(self, fit, t, u, y):
         """`fit.compare(t, u, y)` -> Comparison: a Fit of this model against a record it was

@@ -107,7 +107,8 @@ def from_source(source: str) -> Estimator:
 def estimator(model) -> Estimator:
     """A Model (mtt.load), a model file (.bg), a generated module's file (.py), or a
     generated module imported from its file."""
-    from mtt.api.model import Model, load
+    from mtt.api.loading import load
+    from mtt.api.model import Model
     from mtt.estimator import codegen
 
     if isinstance(model, Estimator):

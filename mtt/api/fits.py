@@ -1,0 +1,60 @@
+"""A fit as a Python user holds it: the generated module's Fit, every attribute read
+through, that prints as `mtt fit` does (str, summary) and shows as a table in Jupyter."""
+
+from __future__ import annotations
+
+import html
+from dataclasses import dataclass, field
+from types import ModuleType, SimpleNamespace
+
+import numpy as np
+
+from mtt.present import fits
+
+
+@dataclass(frozen=True)
+class Fit:
+    """The generated module's `Fit` (k, k_se, ci, fit_percent, warnings...: see its
+    docstring), with its report."""
+
+    result: object
+    module: ModuleType = field(repr=False)
+    notes: tuple[str, ...] = ()  # where each record came from, for the report's first line
+
+    def __getattr__(self, name: str):
+        if name.startswith("__"):  # copy, pickle and dataclasses ask for these
+            raise AttributeError(name)
+        return getattr(self.result, name)
+
+    def summary(self) -> str:
+        """The text `mtt fit` prints: each unknown's estimate, standard error and 95 %
+        interval, the fit, the method and the local minima of the criterion."""
+        records = [SimpleNamespace(note=note) for note in self.notes]
+        return fits.fit_text(self.module, records, self.result)
+
+    def __str__(self) -> str:
+        return self.summary()
+
+    def __repr__(self) -> str:
+        return repr(self.result)
+
+    def _repr_html_(self) -> str:
+        """The estimates as a table (Jupyter shows it), then the fit and the warnings."""
+        head = f"<p><b>{html.escape(self.module.MODEL)}</b>: {html.escape('; '.join(self.notes))}"
+        if not self.result.ok:
+            return f"{head}</p><p>no estimate: {html.escape(self.result.message)}</p>"
+        cells = zip(self.module.UNKNOWNS, np.atleast_1d(self.result.k),
+                    np.atleast_1d(self.result.k_se), np.reshape(self.result.ci, (-1, 2)),
+                    strict=True)  # fmt: skip
+        rows = "".join(
+            f"<tr><td>{html.escape(name)}</td><td>{k:.6g}</td><td>{se:.3g}</td>"
+            f"<td>{low:.6g} to {high:.6g}</td></tr>"
+            for name, k, se, (low, high) in cells
+        )
+        warnings = "".join(f"<li>{html.escape(text)}</li>" for text in self.result.warnings)
+        return (
+            f"{head}</p><table><tr><th>unknown</th><th>estimate</th><th>standard error</th>"
+            f"<th>95 % interval</th></tr>{rows}</table>"
+            f"<p>fit {self.result.fit_percent:.4g} %, residual RMS "
+            f"{self.result.residual_rms:.3g}</p>" + (f"<ul>{warnings}</ul>" if warnings else "")
+        )
