@@ -403,3 +403,17 @@ def test_a_fit_prints_as_the_command_line_does_and_shows_as_a_table():
     assert str(both).startswith("rlc: 501 samples; 501 samples")
     with pytest.raises(mtt.MttError, match="unexpected parameter 'holds'"):
         rlc.fit(t, u, y, holds="zoh")  # a misspelt keyword is not a kept parameter either
+
+
+def test_fit_and_estimate_list_the_generated_module_s_keywords():
+    """The API's signatures are written out; they must stay those of the template's."""
+    import inspect
+
+    model = mtt.load(mtt.example("rlc"))
+    module = model.estimator()
+    for name in ("fit", "estimate"):
+        ours = inspect.signature(getattr(model, name)).parameters
+        theirs = inspect.signature(getattr(module, name)).parameters
+        assert [(p.name, p.kind, p.default) for p in ours.values()] == [
+            (p.name, p.kind, p.default) for p in theirs.values()
+        ]
