@@ -30,6 +30,17 @@ def two_tanks() -> NonlinearStateSpace:
 TWO_TANKS_K = (0.5, 0.4, 1.0)
 
 
+def weir_tanks() -> NonlinearStateSpace:
+    """The tanks of models/two_tanks.bg: areas 50 and 40, the upper one spilling over its
+    rim (30 above its orifice) as a weir, 20 max(h1 - 30, 0)^(3/2), into the lower one.
+    A power of a branch that has no real value on the other side of its surface."""
+    q1, q2, u, y, a1, a2 = sympy.symbols("q1 q2 u y a1 a2")
+    h1, h2 = q1 / 50, q2 / 40
+    fall = a1 * sympy.sqrt(h1) + 20 * sympy.Max(h1 - 30, 0) ** R(3, 2)
+    f = sympy.Matrix([u - fall, fall - a2 * sympy.sqrt(h2)])
+    return NonlinearStateSpace("weir_tanks", (q1, q2), u, y, (a1, a2), {}, f, sympy.Matrix([h2]))
+
+
 def pendulum(friction: str = "tanh") -> NonlinearStateSpace:
     """Flux linkage lam (inductance 1/20, resistance 1), angular momentum h (inertia J),
     angle th; torque constant 1/2, gravity 1/2 sin(th), viscous 1/100 and Coulomb fc

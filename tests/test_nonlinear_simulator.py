@@ -11,7 +11,7 @@ import math
 import numpy as np
 import pytest
 import sympy
-from nonlinear_models import PENDULUM_K, TWO_TANKS_K, pendulum, two_tanks
+from nonlinear_models import PENDULUM_K, TWO_TANKS_K, pendulum, two_tanks, weir_tanks
 from scipy.integrate import solve_ivp
 
 from mtt.derivation.nonlinear import NonlinearStateSpace
@@ -94,6 +94,30 @@ def test_two_tanks_match_a_tight_reference_and_locate_every_overflow(tanks, hold
     assert [event[2] for event in run.events] == [(-1.0) ** (i + 1) for i in range(len(fired))]
 
 
+@pytest.mark.parametrize("hold", ["zoh", "linear"])
+def test_a_weir_over_the_rim_is_simulated_through_its_kink(hold):
+    """20 max(h1 - 30, 0)^(3/2): the branch over the rim has no value below it, so the
+    integrators may not step past the surface on it (they approach it); many sets at
+    once as well."""
+    module = nonlinear_codegen.load(weir_tanks(), true_values={"a1": 2, "a2": 2.5})
+    t = np.linspace(0.0, 1500.0, 301)
+    u = 8.0 + 6.0 * module.input_signal("prbs", t, period=150.0)
+    x0 = [1000.0, 1000.0]
+
+    def rhs(time, x):
+        j = min(max(int(np.searchsorted(t, time, side="right")) - 1, 0), t.size - 2)
+        uu = u[j] if hold == "zoh" else u[j] + (time - t[j]) * (u[j + 1] - u[j]) / (t[j + 1] - t[j])
+        fall = 2 * math.sqrt(x[0] / 50) + 20 * max(x[0] / 50 - 30, 0.0) ** 1.5
+        return [uu - fall, fall - 2.5 * math.sqrt(x[1] / 40)]
+
+    states, fired = _reference(rhs, t, x0, lambda time, x: x[0] / 50 - 30)
+    run = module.sensitivities(t, u, x0=x0, hold=hold, rtol=1e-10, atol=1e-10)
+    assert len(fired) >= 2 and len(run.events) == len(fired)
+    assert np.max(np.abs(run.x - states)) < 1e-8 * np.max(np.abs(states))
+    rows = module.simulate(t, u, [[2.0, 2.5], [2.1, 2.4]], x0=x0, hold=hold, rtol=1e-10, atol=1e-10)
+    assert np.max(np.abs(rows[0] - states[:, 1] / 40)) < 1e-8 * np.max(states[:, 1] / 40)
+
+
 def test_pendulum_matches_a_tight_reference(arm):
     t = np.linspace(0.0, 10.0, 501)
     u = arm.input_signal("multisine", t, amplitude=3.0, period=5.0)
@@ -161,7 +185,7 @@ def test_stiction_is_reported_not_smoothed():
 
 def test_a_tank_run_dry_is_a_simulation_error(tanks):
     t = np.linspace(0.0, 100.0, 101)
-    with pytest.raises(tanks.SimulationError, match=r"between t = \d"):
+    with pytest.raises(tanks.SimulationError, match=r"at t = 2\.828|between t = \d"):
         tanks.simulate(t, np.zeros(t.size), x0=[0.5, 0.5])
 
 

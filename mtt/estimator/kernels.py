@@ -51,11 +51,15 @@ class Switch:
 
 @dataclass(frozen=True)
 class Frozen:
-    """Expressions with their nonsmooth sites replaced by mode polynomials."""
+    """Expressions with their nonsmooth sites replaced by mode polynomials. A min or max
+    chooses its branch by selectors, symbols worth 1 or 0 (`selectors`: each one's value
+    in terms of its mode), kept as symbols so that a power of a branch pulls them out
+    (max(z, 0)^(3/2) -> q z^(3/2)): its derivative then never divides 0 by 0."""
 
     expressions: tuple[sympy.Expr, ...]
     switches: tuple[Switch, ...]
     modes: tuple[sympy.Symbol, ...]
+    selectors: tuple[tuple[sympy.Symbol, sympy.Expr], ...] = ()
 
 
 def freeze(expressions: list[sympy.Expr]) -> Frozen:
@@ -63,6 +67,16 @@ def freeze(expressions: list[sympy.Expr]) -> Frozen:
     sites: dict[tuple[str, tuple[sympy.Expr, ...]], sympy.Symbol] = {}
     switches: list[Switch] = []
     modes: list[sympy.Symbol] = []
+    selectors: list[tuple[sympy.Symbol, sympy.Expr]] = []
+    chosen: dict[sympy.Symbol, tuple[sympy.Symbol, sympy.Symbol]] = {}
+
+    def select(m: sympy.Symbol) -> tuple[sympy.Symbol, sympy.Symbol]:
+        """The selectors (1 + m)/2 and (1 - m)/2 of mode m, as symbols."""
+        if m not in chosen:
+            up, down = sympy.Symbol(f"{m.name}p"), sympy.Symbol(f"{m.name}n")
+            chosen[m] = (up, down)
+            selectors.extend([(up, (1 + m) / 2), (down, (1 - m) / 2)])
+        return chosen[m]
 
     def mode(kind: str, function: sympy.Expr, key: tuple) -> sympy.Symbol:
         if key not in sites:
@@ -85,18 +99,61 @@ def freeze(expressions: list[sympy.Expr]) -> Frozen:
             ordered = sorted(args, key=sympy.default_sort_key)  # a deterministic fold
             value = ordered[0]
             for arg in ordered[1:]:
-                m = mode(kind, value - arg, (kind, (value, arg)))
+                up, down = select(mode(kind, value - arg, (kind, (value, arg))))
                 if kind == "min":
-                    m = -m
-                # exact in floating point: the factors are 1 and 0
-                value = (1 + m) / 2 * value + (1 - m) / 2 * arg
+                    up, down = down, up
+                value = up * value + down * arg  # exact in floating point: 1 and 0
             return value
         if isinstance(expr, sympy.Piecewise | sympy.Heaviside):
             raise KernelError(f"{type(expr).__name__} is not supported in a simulator: {expr}")
+        if isinstance(expr, sympy.Pow) and args[1].is_positive and args[0].is_Mul:
+            picked = [f for f in args[0].args if f in chosen_symbols()]
+            if picked:  # (q z)^e = q z^e for a selector q (1 or 0) and e > 0
+                rest = sympy.Mul(*(f for f in args[0].args if f not in picked))
+                return sympy.Mul(*picked) * rest ** args[1]
         return expr.func(*args)
 
+    def chosen_symbols() -> set[sympy.Symbol]:
+        return {symbol for symbol, _ in selectors}
+
     frozen = tuple(walk(sympy.sympify(e)) for e in expressions)
-    return Frozen(frozen, tuple(switches), tuple(modes))
+    return Frozen(frozen, tuple(switches), tuple(modes), tuple(selectors))
+
+
+def shielded(expr: sympy.Expr, selectors: tuple[tuple[sympy.Symbol, sympy.Expr], ...]):
+    """expr with every branch that a selector switches off kept inside its domain: in a
+    product q * (...) the powers and logarithms of z become those of q z + (1 - q) (z
+    where the branch is on, 1 where it is off; 1 - q is q's complement selector, so both
+    are exact), and asin, acos, atanh of z those of q z. Otherwise an inactive branch,
+    say (h - hmax)^(3/2) below the rim, would be evaluated outside its domain before the
+    zero multiplies it."""
+    pairs = [symbol for symbol, _ in selectors]
+    complement = {up: down for up, down in zip(pairs[::2], pairs[1::2], strict=True)}
+    complement |= {down: up for up, down in complement.items()}
+
+    def shield(e: sympy.Expr, q: sympy.Symbol) -> sympy.Expr:
+        if not e.args:
+            return e
+        args = [shield(a, q) for a in e.args]
+        if isinstance(e, sympy.Pow) and not (args[1].is_Integer and args[1] >= 0):
+            return sympy.Pow(q * args[0] + complement[q], args[1], evaluate=False)
+        if isinstance(e, sympy.log):
+            return sympy.log(q * args[0] + complement[q], evaluate=False)
+        if isinstance(e, sympy.asin | sympy.acos | sympy.atanh):
+            return e.func(q * args[0], evaluate=False)
+        return e.func(*args)
+
+    def walk(e: sympy.Expr) -> sympy.Expr:
+        if not e.args:
+            return e
+        if e.is_Mul:
+            picked = [f for f in e.args if f in complement]
+            if picked:
+                rest = [shield(walk(f), picked[0]) for f in e.args if f not in picked]
+                return sympy.Mul(*picked, *rest, evaluate=False)
+        return e.func(*(walk(a) for a in e.args))
+
+    return walk(sympy.sympify(expr)) if complement else expr
 
 
 class _Printer(PythonCodePrinter):
@@ -178,17 +235,25 @@ def kernel(
     arguments: list[sympy.Symbol],
     expressions: list[sympy.Expr],
     names: dict[sympy.Symbol, str],
+    prelude: tuple[tuple[sympy.Symbol, sympy.Expr], ...] = (),
 ) -> Kernel:
-    """The kernel computing `expressions` from `arguments` (all named in `names`)."""
+    """The kernel computing `expressions` from `arguments` (all named in `names`), after
+    the `prelude`'s definitions (symbol = expression of the arguments) that it uses."""
     for expr in expressions:
         for call in sympy.sympify(expr).atoms(sympy.Function):
             if type(call).__name__ not in FUNCTIONS:
                 raise KernelError(f"the function {type(call).__name__} cannot be simulated")
+    expressions = [shielded(e, prelude) for e in expressions]
     temporaries = sympy.numbered_symbols("w")
     replacements, reduced = sympy.cse(list(expressions), symbols=temporaries, optimizations=None)
     names = dict(names)
     body = []
     printer = _Printer(names)
+    used = set().union(*(sympy.sympify(e).free_symbols for e in expressions))
+    for symbol, value in prelude:
+        if symbol in used:
+            body.append(f"{symbol.name} = {printer.doprint(value)}")
+            names[symbol] = symbol.name
     for symbol, value in replacements:
         text = printer.doprint(value)
         names[symbol] = symbol.name

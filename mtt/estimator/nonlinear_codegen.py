@@ -96,19 +96,21 @@ def _kernels(system: NonlinearStateSpace, kept: list[sympy.Symbol]) -> tuple[Fro
     second_names = names | {s_: s_.name for s_ in v} | {du: "du"}
     zeros = {(i, j) for i in range(n) for j in range(n) if f_x[i, j] == 0}
     rest = [names[a] for a in arguments[n + 1 :]]
+    prelude = frozen.selectors
     kernels = [
-        kernel("rhs", arguments, list(f), names),
-        kernel("output", arguments, [g], names),
-        kernel("jacobian", arguments, first, names),
-        kernel("switches", arguments, s, names),
+        kernel("rhs", arguments, list(f), names, prelude),
+        kernel("output", arguments, [g], names, prelude),
+        kernel("jacobian", arguments, first, names, prelude),
+        kernel("switches", arguments, s, names, prelude),
         _modes_kernel(base, frozen, names),
         kernel(
             "switch_gradient",
             arguments,
             [*sm.jacobian(x), *sm.diff(u), *sm.jacobian(k)] if s else [],
             names,
+            prelude,
         ),
-        kernel("second", [*arguments, *v, du], along(f_x) + along(f_k), second_names),
+        kernel("second", [*arguments, *v, du], along(f_x) + along(f_k), second_names, prelude),
         step_kernel(n, zeros, rest),
         sensitivity_kernel(n, len(k), zeros, rest),
     ]
@@ -119,7 +121,8 @@ def _modes_kernel(base: list[sympy.Symbol], frozen: Frozen, names: dict) -> Kern
     """m_i = side(s_i), in order: a switching function may read the modes before it."""
     body: list[str] = []
     for i, switch in enumerate(frozen.switches):
-        one = kernel("m", base + list(frozen.modes[:i]), [switch.function], names)
+        one = kernel("m", base + list(frozen.modes[:i]), [switch.function], names,
+                     frozen.selectors)  # fmt: skip
         renamed = {f"w{j}": f"w{i}_{j}" for j in range(len(one.body))}
 
         def rename(text: str, renamed=renamed) -> str:
