@@ -81,7 +81,9 @@ def _multisine(n: int = 151, span: float = 200.0):
 
 @pytest.mark.parametrize("signal", [_record, _multisine])
 @pytest.mark.parametrize("hold", ["zoh", "linear"])
-def test_two_tanks_match_a_tight_reference_and_locate_every_overflow(tanks, hold, signal):
+def test_two_tanks_match_a_tight_reference_through_every_overflow(tanks, hold, signal):
+    """The overflow is a kink (max): taken on the branch the state is on, crossed under
+    the error control (no event: the sensitivities stay continuous there)."""
     t, u = signal()
     x0, tolerances = [1.0, 1.0], dict(rtol=1e-10, atol=1e-12)
     y = tanks.simulate(t, u, x0=x0, hold=hold, **tolerances)
@@ -90,8 +92,7 @@ def test_two_tanks_match_a_tight_reference_and_locate_every_overflow(tanks, hold
     assert np.max(np.abs(y - states[:, 1] / 1.5)) < 1e-9 * np.max(np.abs(y))
     assert np.max(np.abs(run.x - states)) < 1e-9 * np.max(np.abs(states))
     assert len(fired) >= 3  # the record overflows, stops, and overflows again
-    assert [event[0] for event in run.events] == pytest.approx(fired, abs=1e-8)
-    assert [event[2] for event in run.events] == [(-1.0) ** (i + 1) for i in range(len(fired))]
+    assert not run.events
 
 
 @pytest.mark.parametrize("hold", ["zoh", "linear"])
@@ -112,7 +113,7 @@ def test_a_weir_over_the_rim_is_simulated_through_its_kink(hold):
 
     states, fired = _reference(rhs, t, x0, lambda time, x: x[0] / 50 - 30)
     run = module.sensitivities(t, u, x0=x0, hold=hold, rtol=1e-10, atol=1e-10)
-    assert len(fired) >= 2 and len(run.events) == len(fired)
+    assert len(fired) >= 2 and not run.events
     assert np.max(np.abs(run.x - states)) < 1e-8 * np.max(np.abs(states))
     rows = module.simulate(t, u, [[2.0, 2.5], [2.1, 2.4]], x0=x0, hold=hold, rtol=1e-10, atol=1e-10)
     assert np.max(np.abs(rows[0] - states[:, 1] / 40)) < 1e-8 * np.max(states[:, 1] / 40)
@@ -155,7 +156,7 @@ def _agree_with_finite_differences(module, t, u, k, x0, tight, tolerance=1e-6):
 
 @pytest.mark.parametrize("hold", ["zoh", "linear"])
 def test_sensitivities_agree_with_finite_differences(tanks, arm, hold):
-    tight = dict(hold=hold, rtol=1e-13, atol=1e-15)
+    tight = dict(hold=hold, rtol=1e-12, atol=1e-14)
     t, u = _record(n=401, span=100.0, period=40)
     _agree_with_finite_differences(tanks, t, u, np.array(TWO_TANKS_K), np.array([1.0, 1.0]), tight)
     t = np.linspace(0.0, 5.0, 251)
@@ -252,7 +253,7 @@ def test_the_rosenbrock_step_is_of_order_four(tanks):
     def run(steps: int) -> np.ndarray:
         x, h = [2.0, 1.0], 4.0 / steps
         for i in range(steps):
-            x = list(tanks._FLOAT.rosenbrock(*x, 0.5 + 0.1 * i * h, *TWO_TANKS_K, 1.0, 0.1, h)[:2])
+            x = list(tanks._FLOAT.rosenbrock(*x, 0.5 + 0.1 * i * h, *TWO_TANKS_K, 0.1, h)[:2])
         return np.array(x)
 
     exact = run(2048)

@@ -26,6 +26,9 @@ from sympy.printing.pycode import PythonCodePrinter
 # derivation writes, and pow_ for a power that is neither an integer nor +-1/2. Each is
 # bound to math's function (floats) or numpy's (arrays) by the generated module.
 FUNCTIONS = ("sqrt", "exp", "log", "sin", "cos", "tan", "tanh", "atan", "asin", "acos", "atanh")
+# side(s): the branch of a kink in force at a state (its mode: 1 where s >= 0, else -1);
+# tie(s): a jump's mode at a state (1, -1, or 0 on its surface: the integrators decide)
+SIDE, TIE = sympy.Function("side"), sympy.Function("tie")
 CONSTANTS = {sympy.pi: "pi", sympy.E: "e"}
 
 
@@ -121,14 +124,19 @@ def freeze(expressions: list[sympy.Expr]) -> Frozen:
 
 
 def shielded(expr: sympy.Expr, selectors: tuple[tuple[sympy.Symbol, sympy.Expr], ...]):
-    """expr with every branch that a selector switches off kept inside its domain: in a
+    """expr with every branch that a selector switches off kept inside its domain
+    (`selectors`: definitions among which the selector pairs mNp, mNn): in a
     product q * (...) the powers and logarithms of z become those of q z + (1 - q) (z
     where the branch is on, 1 where it is off; 1 - q is q's complement selector, so both
     are exact), and asin, acos, atanh of z those of q z. Otherwise an inactive branch,
     say (h - hmax)^(3/2) below the rim, would be evaluated outside its domain before the
     zero multiplies it."""
-    pairs = [symbol for symbol, _ in selectors]
-    complement = {up: down for up, down in zip(pairs[::2], pairs[1::2], strict=True)}
+    named = {symbol.name: symbol for symbol, _ in selectors}
+    complement = {
+        named[up]: named[up[:-1] + "n"]
+        for up in named
+        if up.endswith("p") and up[:-1] + "n" in named
+    }
     complement |= {down: up for up, down in complement.items()}
 
     def shield(e: sympy.Expr, q: sympy.Symbol) -> sympy.Expr:
@@ -188,7 +196,7 @@ class _Printer(PythonCodePrinter):
         if not expr.free_symbols:
             return self._constant(expr)
         name = type(expr).__name__
-        if name not in FUNCTIONS:
+        if name not in FUNCTIONS and expr.func not in (SIDE, TIE):
             raise KernelError(f"the function {name} cannot be simulated")
         return f"{name}({', '.join(self._print(a) for a in expr.args)})"
 
@@ -241,7 +249,7 @@ def kernel(
     the `prelude`'s definitions (symbol = expression of the arguments) that it uses."""
     for expr in expressions:
         for call in sympy.sympify(expr).atoms(sympy.Function):
-            if type(call).__name__ not in FUNCTIONS:
+            if type(call).__name__ not in FUNCTIONS and call.func not in (SIDE, TIE):
                 raise KernelError(f"the function {type(call).__name__} cannot be simulated")
     expressions = [shielded(e, prelude) for e in expressions]
     temporaries = sympy.numbered_symbols("w")
@@ -249,11 +257,15 @@ def kernel(
     names = dict(names)
     body = []
     printer = _Printer(names)
-    used = set().union(*(sympy.sympify(e).free_symbols for e in expressions))
-    for symbol, value in prelude:
-        if symbol in used:
-            body.append(f"{symbol.name} = {printer.doprint(value)}")
-            names[symbol] = symbol.name
+    needed = set().union(*(sympy.sympify(e).free_symbols for e in expressions))
+    wanted = []
+    for symbol, value in reversed(prelude):  # the definitions used, and those they use
+        if symbol in needed:
+            wanted.append((symbol, value))
+            needed |= value.free_symbols
+    for symbol, value in reversed(wanted):
+        names[symbol] = symbol.name
+        body.append(f"{symbol.name} = {printer.doprint(value)}")
     for symbol, value in replacements:
         text = printer.doprint(value)
         names[symbol] = symbol.name

@@ -11,14 +11,13 @@ the model's names only ever in strings through repr.
 
 from __future__ import annotations
 
-import re
 import types
 from typing import TYPE_CHECKING
 
 import sympy
 
 from mtt.estimator.codegen import environment, is_name, load_source, shadows
-from mtt.estimator.kernels import Frozen, Kernel, KernelError, freeze, kernel
+from mtt.estimator.kernels import SIDE, TIE, Frozen, KernelError, freeze, kernel
 from mtt.estimator.rosenbrock import sensitivity_kernel, step_kernel
 from mtt.language.diagnostics import ModelError, Source, error
 from mtt.version import __version__
@@ -69,20 +68,26 @@ def _kept(system: NonlinearStateSpace) -> list[sympy.Symbol]:
 
 
 def _kernels(system: NonlinearStateSpace, kept: list[sympy.Symbol]) -> tuple[Frozen, list]:
+    """The module's kernels. A kink (abs, min, max: f stays continuous) takes the branch
+    the state is on, computed inside each kernel (its mode is side(s) there); a jump
+    (sign) keeps the branch its mode argument says, frozen by the integrators between
+    the events they locate."""
     n = len(system.states)
     frozen = freeze([*system.f, system.g[0]])
     f = sympy.Matrix(frozen.expressions[:n])
     g = frozen.expressions[n]
-    x, u, k, m = list(system.states), system.input, list(system.unknowns), list(frozen.modes)
+    x, u, k = list(system.states), system.input, list(system.unknowns)
+    held = [m for m, switch in zip(frozen.modes, frozen.switches, strict=True)
+            if not switch.continuous]  # fmt: skip
     names = {s: f"x{i}" for i, s in enumerate(x)} | {u: "u"}
     names |= {s: f"k{i}" for i, s in enumerate(k)} | {s: f"c{i}" for i, s in enumerate(kept)}
-    names |= {s: s.name for s in m}
+    names |= {s: s.name for s in held}
     base = [*x, u, *k, *kept]
-    arguments = base + m
+    arguments = base + held
     f_x, f_k = f.jacobian(x), f.jacobian(k)
     gm = sympy.Matrix([g])
-    s = [switch.function for switch in frozen.switches]
-    sm = sympy.Matrix(s) if s else sympy.zeros(0, 1)
+    jumps = [switch.function for switch in frozen.switches if not switch.continuous]
+    sm = sympy.Matrix(jumps) if jumps else sympy.zeros(0, 1)
     first = [*f_x, *f.diff(u), *f_k, *gm.jacobian(x), g.diff(u), *gm.jacobian(k)]
     v = [sympy.Symbol(f"v{i}") for i in range(n)]
     du = sympy.Symbol("du")
@@ -96,17 +101,29 @@ def _kernels(system: NonlinearStateSpace, kept: list[sympy.Symbol]) -> tuple[Fro
     second_names = names | {s_: s_.name for s_ in v} | {du: "du"}
     zeros = {(i, j) for i in range(n) for j in range(n) if f_x[i, j] == 0}
     rest = [names[a] for a in arguments[n + 1 :]]
-    prelude = frozen.selectors
+    selectors = dict(frozen.selectors)
+    prelude, every = [], []  # kinks' modes and all selectors; and every mode besides
+    for m, switch in zip(frozen.modes, frozen.switches, strict=True):
+        if switch.continuous:
+            prelude.append((m, SIDE(switch.function)))
+            every.append((m, SIDE(switch.function)))
+        else:
+            every.append((m, TIE(switch.function)))
+        for selector in (sympy.Symbol(f"{m.name}p"), sympy.Symbol(f"{m.name}n")):
+            if selector in selectors:
+                prelude.append((selector, selectors[selector]))
+                every.append((selector, selectors[selector]))
+    prelude, every = tuple(prelude), tuple(every)
     kernels = [
         kernel("rhs", arguments, list(f), names, prelude),
         kernel("output", arguments, [g], names, prelude),
         kernel("jacobian", arguments, first, names, prelude),
-        kernel("switches", arguments, s, names, prelude),
-        _modes_kernel(base, frozen, names),
+        kernel("switches", arguments, jumps, names, prelude),
+        kernel("modes", base, held, names, every),
         kernel(
             "switch_gradient",
             arguments,
-            [*sm.jacobian(x), *sm.diff(u), *sm.jacobian(k)] if s else [],
+            [*sm.jacobian(x), *sm.diff(u), *sm.jacobian(k)] if jumps else [],
             names,
             prelude,
         ),
@@ -115,23 +132,6 @@ def _kernels(system: NonlinearStateSpace, kept: list[sympy.Symbol]) -> tuple[Fro
         sensitivity_kernel(n, len(k), zeros, rest),
     ]
     return frozen, kernels
-
-
-def _modes_kernel(base: list[sympy.Symbol], frozen: Frozen, names: dict) -> Kernel:
-    """m_i = side(s_i), in order: a switching function may read the modes before it."""
-    body: list[str] = []
-    for i, switch in enumerate(frozen.switches):
-        one = kernel("m", base + list(frozen.modes[:i]), [switch.function], names,
-                     frozen.selectors)  # fmt: skip
-        renamed = {f"w{j}": f"w{i}_{j}" for j in range(len(one.body))}
-
-        def rename(text: str, renamed=renamed) -> str:
-            return re.sub(r"\bw\d+\b", lambda match: renamed[match.group(0)], text)
-
-        body += [rename(line) for line in one.body]
-        body.append(f"m{i} = side({rename(one.results[0])})")
-    results = tuple(f"m{i}" for i in range(len(frozen.switches)))
-    return Kernel("modes", tuple(names[a] for a in base), tuple(body), results)
 
 
 def _float(value: sympy.Expr) -> float:
@@ -153,6 +153,7 @@ def _context(
         frozen, kernels = _kernels(system, kept)
     except KernelError as exc:
         raise _fail(system, "unsupported_relation", str(exc)) from None
+    jumps = [switch for switch in frozen.switches if not switch.continuous]
     unknowns = tuple(symbol.name for symbol in system.unknowns)
     p = len(unknowns)
     given = {name: _float(value) for name, value in (true_values or {}).items()}
@@ -189,14 +190,19 @@ def _context(
         ]
         + [f"{system.output.name} = {system.g[0]}"],
         "switches": [
-            f"{i}: {switch.kind}, s = {switch.function}" for i, switch in enumerate(frozen.switches)
+            f"{switch.kind}, s = {switch.function}: "
+            + (
+                "a kink, on the branch the state is on"
+                if switch.continuous
+                else f"a jump, event switch {jumps.index(switch)}"
+            )  # fmt: skip
+            for switch in frozen.switches
         ],
-        "switch_kinds": tuple(switch.kind for switch in frozen.switches),
-        "continuous": tuple(switch.continuous for switch in frozen.switches),
+        "switch_kinds": tuple(switch.kind for switch in jumps),
         "kernels": [k.source() for k in kernels],
         "n": len(system.states),
         "p": p,
-        "r": len(frozen.switches),
+        "r": len(jumps),
     }
 
 
