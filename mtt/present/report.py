@@ -119,15 +119,18 @@ def _assumed(theta: Theta) -> str:
     return f"values substituted: {values}"
 
 
-def tf_text(theta: Theta) -> str:
-    written = Written(theta.num, theta.den)
-    num, den = written(theta.num), written(theta.den)
+def _preamble(theta: Theta, written: Written) -> list[str]:
+    """The heading, the values substituted and the names written otherwise, if any."""
     lines = [_heading(theta)]
     if theta.assumed:
         lines.append(_assumed(theta))
-    if written.note:
-        lines.append(written.note)
-    lines += [
+    return lines + ([written.note] if written.note else [])
+
+
+def tf_text(theta: Theta) -> str:
+    written = Written(theta.num, theta.den)
+    num, den = written(theta.num), written(theta.den)
+    lines = _preamble(theta, written) + [
         "",
         f"  numerator   (m = {theta.m}):  {in_powers_of_s(num)}",
         f"  denominator (n = {theta.n}):  {in_powers_of_s(den)}",
@@ -167,12 +170,7 @@ def theta_text(theta: Theta) -> str:
     ]
     widths = [max(len(r[j]) for r in rows) for j in range(len(rows[0]))]
     table = ["  " + "  ".join(c.rjust(w) for c, w in zip(r, widths, strict=True)) for r in rows]
-    lines = [_heading(theta)]
-    if theta.assumed:
-        lines.append(_assumed(theta))
-    if written.note:
-        lines.append(written.note)
-    lines += [
+    lines = _preamble(theta, written) + [
         f"Theta: n = {theta.n}, m = {theta.m}, {_degrees(theta)}; rows "
         f"{theta.row_labels[0]}..{theta.row_labels[theta.n]}, "
         f"{'..'.join(dict.fromkeys((theta.row_labels[theta.n + 1], theta.row_labels[-1])))}; "
