@@ -82,6 +82,64 @@ def _combination(terms: list[tuple[float, str]], start: str | None = None) -> st
     return text or "0.0"
 
 
+@dataclass(frozen=True)
+class _Factored:
+    """W = I/(h gamma) - f_x factorised in place as L U (unit lower L, multipliers in the
+    w's below the diagonal, 1/U's diagonal in p0..), without pivoting: W is dominated by
+    its diagonal for the steps the error control allows. `lines` compute it (after f_x's
+    entries j0_0.. and f_u's fu0.. from the kernel `jacobian`); `solve` prints a solve."""
+
+    n: int
+    lines: tuple[str, ...]
+    lower: frozenset[tuple[int, int]]
+    upper: frozenset[tuple[int, int]]
+
+    @classmethod
+    def of(cls, n: int, zeros: set[tuple[int, int]], state: list[str], gamma: float):
+        entries = [(i, j) for i in range(n) for j in range(n)]
+        lines = [
+            f"_d = jacobian({', '.join(state)})",
+            f"{''.join(f'j{i}_{j}, ' for i, j in entries)}= _d[:{n * n}]",
+            f"{''.join(f'fu{i}, ' for i in range(n))}= _d[{n * n}:{n * n + n}]",
+            f"_g = 1.0 / ({gamma!r}*h)",
+            "_hinv = 1.0 / h",
+            "_hdu = h*du",
+        ]
+        nonzero = {(i, j) for i, j in entries if (i, j) not in zeros or i == j}
+        for i, j in sorted(nonzero):
+            lines.append(f"w{i}_{j} = _g - j{i}_{j}" if i == j else f"w{i}_{j} = -j{i}_{j}")
+        for k in range(n):
+            lines.append(f"p{k} = 1.0 / w{k}_{k}")
+            for i in range(k + 1, n):
+                if (i, k) not in nonzero:
+                    continue
+                lines.append(f"w{i}_{k} = w{i}_{k}*p{k}")
+                for j in range(k + 1, n):
+                    if (k, j) in nonzero:
+                        old = f"w{i}_{j} - " if (i, j) in nonzero else "-"
+                        lines.append(f"w{i}_{j} = {old}w{i}_{k}*w{k}_{j}")
+                        nonzero.add((i, j))
+        lower = frozenset((i, j) for i, j in nonzero if i > j)
+        upper = frozenset((i, j) for i, j in nonzero if i < j)
+        return cls(n, tuple(lines), lower, upper)
+
+    def solve(self, target: str, r: list[str]) -> list[str]:
+        """Lines solving W target = r (r's names overwritten), into target0, target1.."""
+        lines = []
+        for i in range(self.n):  # forward: L z = r
+            terms = [(-1.0, f"w{i}_{k}*{r[k]}") for k in range(i) if (i, k) in self.lower]
+            if terms:
+                lines.append(f"{r[i]} = {_combination(terms, r[i])}")
+        for i in reversed(range(self.n)):  # backward: U K = z
+            terms = [
+                (-1.0, f"w{i}_{j}*{target}{j}")
+                for j in range(i + 1, self.n)
+                if (i, j) in self.upper
+            ]
+            lines.append(f"{target}{i} = ({_combination(terms, r[i])})*p{i}")
+        return lines
+
+
 def step_kernel(n: int, zeros: set[tuple[int, int]], rest: list[str],
                 tableau: Tableau = RODAS4) -> Kernel:  # fmt: skip
     """`rosenbrock(x0.., u, rest.., du, h) -> (x_new0.., error0..)`: one step from the state
@@ -89,42 +147,11 @@ def step_kernel(n: int, zeros: set[tuple[int, int]], rest: list[str],
     (`rest`: unknowns, kept parameters, modes) passed through. `zeros`: the entries of f_x
     that are zero at every state (kept out of the factorisation)."""
     x = [f"x{i}" for i in range(n)]
-    body = [
-        f"_d = jacobian({', '.join([*x, 'u', *rest])})",
-        f"{''.join(f'j{i}_{j}, ' for i in range(n) for j in range(n))}= _d[:{n * n}]",
-        f"{''.join(f'fu{i}, ' for i in range(n))}= _d[{n * n}:{n * n + n}]",
-        f"_g = 1.0 / ({tableau.gamma!r}*h)",
-        "_hinv = 1.0 / h",
-        "_hdu = h*du",
-    ]
-    # W = I/(h gamma) - f_x, factorised in place as L U (unit lower L), without pivoting:
-    # W is dominated by its diagonal for the steps the error control allows
-    nonzero = {(i, j) for i in range(n) for j in range(n) if (i, j) not in zeros or i == j}
-    for i, j in sorted(nonzero):
-        body.append(f"w{i}_{j} = _g - j{i}_{j}" if i == j else f"w{i}_{j} = -j{i}_{j}")
-    for k in range(n):
-        body.append(f"p{k} = 1.0 / w{k}_{k}")
-        for i in range(k + 1, n):
-            if (i, k) not in nonzero:
-                continue
-            body.append(f"w{i}_{k} = w{i}_{k}*p{k}")
-            for j in range(k + 1, n):
-                if (k, j) in nonzero:
-                    if (i, j) in nonzero:
-                        body.append(f"w{i}_{j} = w{i}_{j} - w{i}_{k}*w{k}_{j}")
-                    else:
-                        body.append(f"w{i}_{j} = -w{i}_{k}*w{k}_{j}")
-                        nonzero.add((i, j))
+    factored = _Factored.of(n, zeros, [*x, "u", *rest], tableau.gamma)
+    body = list(factored.lines)
 
     def solve(stage: int) -> None:
-        r = [f"r{stage}_{i}" for i in range(n)]
-        for i in range(n):  # forward: L z = r
-            terms = [(-1.0, f"w{i}_{k}*{r[k]}") for k in range(i) if (i, k) in nonzero]
-            if terms:
-                body.append(f"{r[i]} = {_combination(terms, r[i])}")
-        for i in reversed(range(n)):  # backward: U K = z
-            terms = [(-1.0, f"w{i}_{j}*K{stage}_{j}") for j in range(i + 1, n) if (i, j) in nonzero]
-            body.append(f"K{stage}_{i} = ({_combination(terms, r[i])})*p{i}")
+        body.extend(factored.solve(f"K{stage}_", [f"r{stage}_{i}" for i in range(n)]))
 
     stages = len(tableau.alpha)
     for s in range(stages):
@@ -168,42 +195,9 @@ def sensitivity_kernel(n: int, p: int, zeros: set[tuple[int, int]], rest: list[s
     S = [[f"s{i}_{a}" for a in range(columns)] for i in range(n)]
     state = [*x, "u", *rest]
     entries = [(i, j) for i in range(n) for j in range(n)]
-    body = [
-        f"_d = jacobian({', '.join(state)})",
-        f"{''.join(f'j{i}_{j}, ' for i, j in entries)}= _d[:{n * n}]",
-        f"{''.join(f'fu{i}, ' for i in range(n))}= _d[{n * n}:{n * n + n}]",
-        f"_g = 1.0 / ({tableau.gamma!r}*h)",
-        "_hinv = 1.0 / h",
-        "_hdu = h*du",
-    ]
-    nonzero = {(i, j) for i, j in entries if (i, j) not in zeros or i == j}
-    for i, j in sorted(nonzero):
-        body.append(f"w{i}_{j} = _g - j{i}_{j}" if i == j else f"w{i}_{j} = -j{i}_{j}")
-    for k in range(n):
-        body.append(f"p{k} = 1.0 / w{k}_{k}")
-        for i in range(k + 1, n):
-            if (i, k) not in nonzero:
-                continue
-            body.append(f"w{i}_{k} = w{i}_{k}*p{k}")
-            for j in range(k + 1, n):
-                if (k, j) in nonzero:
-                    old = f"w{i}_{j} - " if (i, j) in nonzero else "-"
-                    body.append(f"w{i}_{j} = {old}w{i}_{k}*w{k}_{j}")
-                    nonzero.add((i, j))
-    lower = {(i, j) for i, j in nonzero if i > j}
-    upper = {(i, j) for i, j in nonzero if i < j}
-
-    def solve(target: str, r: list[str]) -> list[str]:
-        """Lines solving W target = r (r's names are overwritten), target_i names."""
-        lines = []
-        for i in range(n):
-            terms = [(-1.0, f"w{i}_{k}*{r[k]}") for k in range(i) if (i, k) in lower]
-            if terms:
-                lines.append(f"{r[i]} = {_combination(terms, r[i])}")
-        for i in reversed(range(n)):
-            terms = [(-1.0, f"w{i}_{j}*{target}{j}") for j in range(i + 1, n) if (i, j) in upper]
-            lines.append(f"{target}{i} = ({_combination(terms, r[i])})*p{i}")
-        return lines
+    factored = _Factored.of(n, zeros, state, tableau.gamma)
+    body = list(factored.lines)
+    solve = factored.solve
 
     def coupled(prefix: str, d: str) -> None:
         """prefix{i}_{a} = (d f_x S0)_{ia} + [a < p] (d f_k)_{ia} from a `second` result d."""
