@@ -99,6 +99,10 @@ def _kernels(system: NonlinearStateSpace, kept: list[sympy.Symbol]) -> tuple[Fro
         ]
 
     second_names = names | {s_: s_.name for s_ in v} | {du: "du"}
+    columns = len(k) + n  # sensitivities to the unknowns, then to the initial state
+    S = sympy.Matrix(n, columns, lambda i, a: sympy.Symbol(f"s{i}_{a}"))
+    flow = f_x * S + f_k.row_join(sympy.zeros(n, n))
+    augmented_names = names | {entry: entry.name for entry in S}
     zeros = {(i, j) for i in range(n) for j in range(n) if f_x[i, j] == 0}
     rest = [names[a] for a in arguments[n + 1 :]]
     selectors = dict(frozen.selectors)
@@ -128,6 +132,9 @@ def _kernels(system: NonlinearStateSpace, kept: list[sympy.Symbol]) -> tuple[Fro
             prelude,
         ),
         kernel("second", [*arguments, *v, du], along(f_x) + along(f_k), second_names, prelude),
+        kernel(
+            "augmented", [*x, *S, u, *arguments[n + 1 :]], [*f, *flow], augmented_names, prelude
+        ),
         step_kernel(n, zeros, rest),
         sensitivity_kernel(n, len(k), zeros, rest),
     ]
