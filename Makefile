@@ -51,6 +51,12 @@ demo: $(STAMP)
 COMPILE_OPTIONS_absorber := --keep tau,l
 COMPILE_OPTIONS_absorber_stages := --keep tau,l
 # dc_motor (ra, jl) and rlc3 (r, l, c) identify all their unknowns together.
+# The nonlinear models (issue 19) compile the estimator of their small-signal model about
+# an operating point: the tanks below the upper tank's rim, the pendulum hanging (branch 1
+# of 2: mtt equilibrium models/pendulum.bg --u 1), the clipper with its diode conducting.
+COMPILE_OPTIONS_two_tanks := --at u=10
+COMPILE_OPTIONS_pendulum := --at u=1 --branch 1
+COMPILE_OPTIONS_diode_clipper := --at u=1
 GENERATED := $(patsubst models/%.bg,generated/%.py,$(MODELS))
 
 compile: $(GENERATED)

@@ -13,6 +13,7 @@ import sympy
 from oracle import oracle_tf
 
 from mtt.derivation.causality import CausalBondGraph, assign, describe
+from mtt.derivation.nonlinear import nonlinear_parts, nonlinear_state_space
 from mtt.derivation.pipeline import causal_for, load, transfer_for
 from mtt.derivation.structure import structure_problems
 from mtt.language.diagnostics import ModelError, Source
@@ -355,7 +356,11 @@ def test_the_structural_checks_pass_every_valid_model():
     for path in paths:
         graph = load(path)
         assert structure_problems(assign(graph)) == [], path
-        if graph.unknowns:  # and each unknown is really in the transfer function
+        if graph.unknowns and nonlinear_parts(graph):  # each unknown is in the equations
+            system = nonlinear_state_space(path)
+            free = {str(x) for x in system.f.free_symbols | system.g.free_symbols}
+            assert set(graph.unknowns) <= free, path
+        elif graph.unknowns:  # and each unknown is really in the transfer function
             tf = transfer_for(path)
             free = {str(x) for x in (tf.numerator / tf.denominator).free_symbols}
             assert set(graph.unknowns) <= free, path

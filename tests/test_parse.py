@@ -418,7 +418,7 @@ def test_input_and_output_statements(models):
         ("Se:v -> 1:j ->", 15),  # a dangling arrow
         ('Se:v -> 1:j "bonds have no description"', 13),
         ("input Se:v Sf:w", 12),
-        ("param p = tan(1)", 11),  # unknown function
+        ("param p = tangent(1)", 11),  # unknown function
         ("param p = 1/0", 13),  # division by zero
         ("param p = log(0)", 11),  # undefined value
         ("param p = 0^-1", 12),

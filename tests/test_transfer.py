@@ -19,14 +19,20 @@ from oracle import Singular, oracle_tf
 from sympy.polys.matrices import DomainMatrix
 
 from mtt.derivation import determinants
+from mtt.derivation.nonlinear import nonlinear_parts
 from mtt.derivation.parameters import ParameterChoice
-from mtt.derivation.pipeline import transfer_for
+from mtt.derivation.pipeline import load, transfer_for
 from mtt.derivation.transfer import TransferFunction
 from mtt.language.diagnostics import ModelError
 
 ROOT = Path(__file__).resolve().parent.parent
 SYSTEMS = Path(__file__).resolve().parent / "data" / "systems"
-ALL_MODELS = sorted(SYSTEMS.glob("*.bg")) + sorted((ROOT / "models").glob("*.bg"))
+# the linear ones (a nonlinear model's transfer function is its small-signal model's)
+ALL_MODELS = [
+    path
+    for path in sorted(SYSTEMS.glob("*.bg")) + sorted((ROOT / "models").glob("*.bg"))
+    if not nonlinear_parts(load(path))
+]
 
 s = sympy.Symbol("s")
 

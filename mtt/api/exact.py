@@ -5,7 +5,9 @@ not)."""
 from __future__ import annotations
 
 import math
+from collections.abc import Mapping
 from fractions import Fraction
+from types import MappingProxyType
 
 import numpy as np
 import sympy
@@ -43,3 +45,19 @@ def numeric(expr: sympy.Expr, what: str) -> float:
     if not math.isfinite(number):
         raise MttError(f"{what} is too large for a float", kind="out_of_range")
     return number
+
+
+def exact_point(at: Mapping[str, object] | None) -> MappingProxyType | None:
+    """An operating point ({"u": 3.2}, states by name, or "x": [v1, v2]) read exactly."""
+    if at is None:
+        return None
+    if not isinstance(at, Mapping):
+        raise MttError(f"at takes a dict {{name: value}}, not {at!r}", kind="bad_value")
+    return MappingProxyType(
+        {
+            name: tuple(exact(name, v) for v in value)
+            if name == "x" and isinstance(value, list | tuple)
+            else exact(name, value)
+            for name, value in at.items()
+        }
+    )

@@ -6,7 +6,7 @@ from collections.abc import Iterable, Mapping
 from pathlib import Path
 from types import MappingProxyType
 
-from mtt.api.exact import exact
+from mtt.api.exact import exact, exact_point
 from mtt.api.model import Model
 from mtt.derivation import pipeline
 from mtt.derivation.budget import chosen_budget
@@ -67,6 +67,8 @@ def load(
     set: Mapping[str, object] | None = None,
     keep: str | Iterable[str] | None = None,
     max_terms: int | None = None,
+    at: Mapping[str, object] | None = None,
+    branch: int | None = None,
 ) -> Model:
     """Read and check a model: a file name (str or Path), or the model's text itself (a str
     with a line break). Raise `MttError` for anything wrong in it.
@@ -79,6 +81,9 @@ def load(
     keep: parameters kept symbolic instead of substituted (names, or "a,b").
     max_terms: the most terms a polynomial of the derivation may have (default 20000);
         beyond, deriving raises MttError too_large instead of growing without bound.
+    at, branch: a nonlinear model's operating point ({"u": 3.2}, or states by name) and
+        which steady state when there are several: its stages are then those of its
+        small-signal model there (see `Model.linearise`).
 
     >>> import mtt
     >>> model = mtt.load('''
@@ -107,6 +112,8 @@ def load(
         input=_component("input", input),
         output=_component("output", output),
         budget=chosen_budget(max_terms),
+        at=exact_point(at),
+        branch=branch,
     )
     source = _source(path_or_text)
     graph = build(parse(source), choice.selection)

@@ -4,7 +4,7 @@ derived once, when first asked for (`mtt.load` makes one: mtt/api/loading.py).""
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from functools import cached_property
 from pathlib import Path
 from types import ModuleType
@@ -12,15 +12,18 @@ from types import ModuleType
 import numpy as np
 
 from mtt.api import systems
+from mtt.api.exact import exact, exact_point
 from mtt.api.fits import Fit
-from mtt.api.results import Causality, StateSpace, Theta, TransferFunction
+from mtt.api.results import Causality, StateSpace, SteadyStates, Theta, TransferFunction
 from mtt.data import records
 from mtt.data.records import Record
 from mtt.derivation import pipeline
 from mtt.derivation import theta as derived
 from mtt.derivation.causality import assign
 from mtt.derivation.equations import Equations
+from mtt.derivation.equilibria import equilibria
 from mtt.derivation.identifiability import Identifiability, identifiability
+from mtt.derivation.nonlinear import nonlinear_parts
 from mtt.derivation.parameters import ParameterChoice
 from mtt.derivation.transfer import transfer_function
 from mtt.estimator import codegen
@@ -106,8 +109,35 @@ class Model:
         return pipeline.equations_for(self.bondgraph, self.choice)
 
     @cached_property
+    def _system(self):
+        return pipeline.state_equations_for(self.bondgraph, self.choice)
+
+    @property
+    def nonlinear(self) -> bool:
+        """Whether a relation, a modulated source or a two-port makes the model nonlinear."""
+        return bool(nonlinear_parts(self.bondgraph))
+
+    @cached_property
     def state_space(self) -> StateSpace:
+        """The state equations: x' = f(x, u), y = g(x, u) for a nonlinear model (about
+        an operating point, when it has one: the small-signal model), E x' = A x + B u,
+        y = C x + D u for a linear one."""
+        if self.nonlinear and self.choice.at is None:
+            return StateSpace(None, self._system[0])
         return StateSpace(self._equations)
+
+    def equilibrium(self, u: object) -> SteadyStates:
+        """The steady states at the constant input u: every branch, exact in the unknowns
+        and kept parameters where sympy solves the equations, else numeric (docs/api.md)."""
+        system, values = self._system
+        return SteadyStates(system, equilibria(system, exact("u", u), values))
+
+    def linearise(self, branch: int | None = None, **at: object) -> Model:
+        """The model about an operating point (u=..., states by name, or x=[...]): its
+        stages (state_space, transfer_function, theta, compile, fit) are those of the
+        small-signal model there (docs/api.md)."""
+        choice = replace(self.choice, at=exact_point(at), branch=branch)
+        return Model(self.bondgraph, choice)
 
     @cached_property
     def _theta(self) -> derived.Theta:

@@ -18,9 +18,11 @@ from mtt.api.exact import numeric
 from mtt.derivation import theta as derived
 from mtt.derivation.causality import CausalBondGraph, describe
 from mtt.derivation.equations import Equations
+from mtt.derivation.equilibria import Equilibria
+from mtt.derivation.nonlinear import NonlinearStateSpace
 from mtt.derivation.transfer import LAPLACE
 from mtt.language.diagnostics import MttError
-from mtt.present import report
+from mtt.present import nonlinear, report
 
 
 def _leading_zeros_dropped(coefficients: np.ndarray) -> np.ndarray:
@@ -191,8 +193,10 @@ class Theta:
 
 @dataclass(frozen=True)
 class StateSpace:
-    """The descriptor form E x' = A x + B u, y = C x + D u: exact sympy matrices, with
-    x the energy variables (q of each C, p of each I) named in `states`.
+    """The state equations. A linear model's descriptor form E x' = A x + B u,
+    y = C x + D u: exact sympy matrices, with x the energy variables (q of each C, p of
+    each I) named in `states`. A nonlinear model's x' = f(x, u), y = g(x, u): `f` and `g`,
+    exact sympy matrices (its A..D exist about an operating point: `Model.linearise`).
 
     >>> import mtt
     >>> ss = mtt.load(mtt.example("rlc")).state_space  # r = 2, l = 1/2, c unknown
@@ -202,16 +206,49 @@ class StateSpace:
     (Matrix([
     [-4, -1/c],
     [ 2,    0]]), Matrix([[1, 0]]), Matrix([[2, 0]]))
+    >>> tanks = mtt.load(mtt.example("two_tanks")).state_space
+    >>> tanks.nonlinear, tanks.states
+    (True, ('q_upper', 'q_lower'))
     """
 
-    equations: Equations
+    equations: Equations | None
+    system: NonlinearStateSpace | None = None
+
+    @property
+    def nonlinear(self) -> bool:
+        return self.system is not None
 
     @property
     def states(self) -> tuple[str, ...]:
+        if self.system is not None:
+            return tuple(x.name for x in self.system.states)
         return self.equations.states
+
+    @property
+    def f(self) -> sympy.Matrix:
+        """x' = f(x, u) (a nonlinear model's)."""
+        return self._nonlinear().f
+
+    @property
+    def g(self) -> sympy.Matrix:
+        """y = g(x, u) (a nonlinear model's)."""
+        return self._nonlinear().g
+
+    def _nonlinear(self) -> NonlinearStateSpace:
+        if self.system is None:
+            raise MttError(
+                "a linear model's state space is its matrices E, A, B, C, D", kind="linear_model"
+            )
+        return self.system
 
     @cached_property
     def _matrices(self) -> dict[str, sympy.Matrix]:
+        if self.equations is None:
+            raise MttError(
+                f"{self.system.name} is nonlinear: its A, B, C, D exist about an operating "
+                "point (model.linearise(u=...)); f and g are its state equations",
+                kind="nonlinear_model",
+            )
         return self.equations.matrices()
 
     E = property(lambda self: self._matrices["E"])
@@ -230,6 +267,7 @@ class StateSpace:
         >>> A.tolist(), B.ravel().tolist(), C.ravel().tolist(), D.ravel().tolist()
         ([[-4.0, -10.0], [2.0, 0.0]], [1.0, 0.0], [2.0, 0.0], [0.0])
         """
+        matrices = self._matrices  # a nonlinear model has none: MttError
         model = self.equations.causal.bondgraph.name
         substitution = values.substitution(self.equations.parametrisation, model, k, named)
         E, A, B, C, D = (
@@ -237,7 +275,7 @@ class StateSpace:
                 [numeric(entry.xreplace(substitution), f"an entry of {name}") for entry in matrix],
                 dtype=float,
             ).reshape(matrix.shape)
-            for name, matrix in self._matrices.items()
+            for name, matrix in matrices.items()
         )
         try:
             return np.linalg.solve(E, A), np.linalg.solve(E, B), C, D
@@ -250,19 +288,56 @@ class StateSpace:
     @property
     def relations(self) -> tuple[tuple[str, sympy.Expr], ...]:
         """The causal equations, variable = expression (bond variables e1, f1, ...)."""
-        return self.equations.relations
+        return self.equations.relations if self.equations is not None else ()
 
     def __str__(self) -> str:
+        if self.system is not None:
+            return nonlinear.equations_text(self.system)
         return report.ss_text(self.equations)
 
     def __repr__(self) -> str:
-        return f"StateSpace(states={self.states})"
+        kind = "nonlinear, " if self.nonlinear else ""
+        return f"StateSpace({kind}states={self.states})"
 
     def _repr_latex_(self) -> str:
+        if self.system is not None:
+            return f"$\\displaystyle {nonlinear.equations_latex(self.system)}$"
         body = ",\\quad ".join(
             f"{name} = {report.latex(matrix)}" for name, matrix in self._matrices.items()
         )
         return f"$\\displaystyle {body}$"
+
+
+@dataclass(frozen=True)
+class SteadyStates:
+    """The steady states of a model at a constant input (`Model.equilibrium`): `branches`,
+    each a dict state name -> exact value (or a float where sympy could not solve)."""
+
+    system: NonlinearStateSpace
+    found: Equilibria
+
+    @property
+    def u(self) -> sympy.Expr:
+        return self.found.u
+
+    @property
+    def exact(self) -> bool:
+        return self.found.method == "exact"
+
+    @property
+    def branches(self) -> list[dict[str, sympy.Expr]]:
+        return [{x.name: v for x, v in b.x.items()} for b in self.found.branches]
+
+    @property
+    def numeric(self) -> list[dict[str, float]]:
+        """Each branch at the file's values of the unknowns and kept parameters."""
+        return [{x.name: v for x, v in b.numeric.items()} for b in self.found.branches]
+
+    def __str__(self) -> str:
+        return nonlinear.equilibria_text(self.system, self.found)
+
+    def __repr__(self) -> str:
+        return f"SteadyStates(u={self.u}, branches={self.branches})"
 
 
 @dataclass(frozen=True)

@@ -36,4 +36,7 @@ def equations(args, identify: bool = False) -> Equations:
                 "stays symbolic here (its value is the true value of simulations)",
                 file=sys.stderr,
             )
-    return equations_for(graph, choice_from_args(args), identify)
+    found = equations_for(graph, choice_from_args(args), identify)
+    for note in found.notes:  # how a nonlinear model's linearisation was made
+        print(note.render(graph.source), file=sys.stderr)
+    return found

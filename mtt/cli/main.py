@@ -14,7 +14,7 @@ import sys
 import traceback
 from typing import TYPE_CHECKING
 
-from mtt.cli import experiment_args, identify, loading, views
+from mtt.cli import experiment_args, identify, loading, operating, views
 from mtt.cli.options import (
     Parser,
     add_parameter_options,
@@ -149,13 +149,33 @@ def cmd_causality(args) -> int:
 
 
 def cmd_ss(args) -> int:
+    from mtt.derivation.nonlinear import nonlinear_parts
     from mtt.present import report
 
+    if not args.at and nonlinear_parts(graph := loading.load_graph(args)):
+        return _nonlinear_ss(args, graph)
     equations = loading.equations(args)
     if args.json:
         _print_json(report.ss_json(equations))
     else:
         print(report.ss_latex(equations) if args.latex else report.ss_text(equations))
+    return EXIT_OK
+
+
+def _nonlinear_ss(args, graph: BondGraph) -> int:
+    """x' = f(x, u), y = g(x, u) of a nonlinear model (with --at: its linearisation)."""
+    from mtt.derivation.pipeline import state_equations_for
+    from mtt.present import nonlinear
+
+    system, _ = state_equations_for(graph, choice_from_args(args))
+    if args.json:
+        symbols = tuple(
+            str(s) for s in sorted(system.f.free_symbols | system.g.free_symbols, key=str)
+            if s not in (*system.states, system.input, *system.unknowns)
+        )  # fmt: skip
+        _print_json(nonlinear.equations_json(system, symbols))
+    else:
+        print(nonlinear.equations_latex(system) if args.latex else nonlinear.equations_text(system))
     return EXIT_OK
 
 
@@ -265,6 +285,7 @@ def make_parser() -> argparse.ArgumentParser:
     compile_ = commands.choices["compile"]
     compile_.set_defaults(run=identify.warn_on_compile(compile_.get_default("run")))
     identify.register(commands)
+    operating.register(commands)
     views.register(commands)
     return parser
 

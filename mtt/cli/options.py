@@ -45,7 +45,7 @@ def _is_name(text: str) -> bool:
     return all(part.isidentifier() for part in text.split("."))
 
 
-def _assignment(text: str) -> tuple[str, sympy.Expr]:
+def assignment(text: str) -> tuple[str, sympy.Expr]:
     from mtt.language.parse import parse_expression
 
     name, equals, value = text.partition("=")
@@ -55,6 +55,21 @@ def _assignment(text: str) -> tuple[str, sympy.Expr]:
         return name.strip(), parse_expression(value, variables=frozenset())
     except Exception as exc:  # ModelError: a bad expression on the command line
         raise argparse.ArgumentTypeError(f"bad value in {text!r}: {exc}") from None
+
+
+def _point(text: str) -> list[tuple[str, object]]:
+    """`--at u=3.2,q_t=1/2`: values of the input and of states, exact; `x=V1;V2...` the
+    states in order."""
+    values = []
+    for part in (p for p in text.split(",") if p.strip()):
+        name, equals, value = part.partition("=")
+        if name.strip() == "x" and equals:
+            values.append(("x", tuple(assignment(f"x={v}")[1] for v in value.split(";"))))
+        else:
+            values.append(assignment(part))
+    if not values:
+        raise argparse.ArgumentTypeError(f"expected NAME=VALUE[,NAME=VALUE...], not {text!r}")
+    return values
 
 
 def _component(text: str) -> str:
@@ -108,7 +123,7 @@ def add_parameter_options(parser: argparse.ArgumentParser) -> None:
     group.add_argument(
         "--set",
         metavar="NAME=VALUE",
-        type=_assignment,
+        type=assignment,
         action="append",
         default=[],
         dest="overrides",
@@ -120,6 +135,23 @@ def add_parameter_options(parser: argparse.ArgumentParser) -> None:
         type=_positive,
         help="the most terms a polynomial of the derivation may have before it stops with "
         "too_large (default 20000: symbolic results can grow exponentially)",
+    )
+
+    group = parser.add_argument_group("operating point (nonlinear models)")
+    group.add_argument(
+        "--at",
+        metavar="NAME=VALUE,...",
+        type=_point,
+        action="extend",
+        help="linearise about this point: the input u and/or states by name (q_tank=0.5), "
+        "or x=V1;V2;... for all states in order; what is not given is the steady state "
+        "(see mtt equilibrium)",
+    )
+    group.add_argument(
+        "--branch",
+        metavar="N",
+        type=_positive,
+        help="which steady state, when there are several (as mtt equilibrium numbers them)",
     )
 
 
@@ -152,6 +184,8 @@ def choice_from_args(args: argparse.Namespace) -> ParameterChoice:
         input=args.input,
         output=args.output,
         budget=DEFAULT_BUDGET if terms is None else Budget(terms),
+        at=MappingProxyType(dict(args.at)) if getattr(args, "at", None) else None,
+        branch=getattr(args, "branch", None),
     )
 
 

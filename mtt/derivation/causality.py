@@ -73,8 +73,9 @@ class _Assignment:
     """A partial causal assignment, propagated to a fixed point after every choice, with
     the trail of its bonds in the order they were set (and why), to undo choices."""
 
-    def __init__(self, graph: BondGraph):
+    def __init__(self, graph: BondGraph, strict: bool = True):
         self.graph = graph
+        self.strict = strict  # relations used only the ways they can be (else: any way)
         self.effort_from: dict[int, str] = {}
         self.cause: dict[int, str] = {}  # bond -> the component whose choice set it
         self.level: dict[int, int] = {}  # bond -> the number of choices made when it was set
@@ -155,7 +156,7 @@ class _Assignment:
 
     def _propagate(self, name: str, queue: deque) -> None:
         component = self.graph.component(name)
-        rule = component.type.causality
+        rule = component.causality if self.strict else component.type.causality
         ports = self.ports[name]
         if rule.kind is CausalKind.FIXED:
             self._set(name, ports[0], rule.imposes_effort, queue, ())
@@ -211,18 +212,56 @@ class _Assignment:
 
 
 def assign(graph: BondGraph) -> CausalBondGraph:
-    """Sequential causality assignment; raise `ModelError` (causal_conflict) if impossible."""
-    state = _Assignment(graph)
+    """Sequential causality assignment; raise `ModelError` (causal_conflict) if impossible,
+    or (no_inverse) if it is possible only with a relation used the way it cannot be."""
+    try:
+        return _assign(graph, strict=True)
+    except ModelError as found:
+        conflict = found
+        one_way = [c for c in graph.components if c.causality != c.type.causality]
+        if not one_way:
+            raise
+        try:
+            relaxed = _assign(graph, strict=False)
+        except ModelError:
+            raise conflict from None
+    problems = []
+    for component in one_way:
+        bond = graph.ports(component.name)[0].bond
+        imposes = relaxed.imposes_effort(component.name, bond)
+        if imposes == component.causality.imposes_effort:
+            continue
+        needed = component.needs(imposes)
+        given = component.relation.given[0]
+        message = (
+            f"{component.label} gives {given.variable} ({component.relation.text()}), but "
+            f"causality makes it give {needed}, and its relation has no exact inverse: write "
+            f"it {needed} = ..., or add the inverse after a comma "
+            f"({component.type.name}:{component.name}({given.text()}, {needed} = ...))"
+        )
+        problems.append(error("no_inverse", message, given.position))
+    raise ModelError(graph.source, problems) if problems else conflict
+
+
+def _assign(graph: BondGraph, strict: bool) -> CausalBondGraph:
+    state = _Assignment(graph, strict)
     by_role = {role: [c for c in graph.components if c.type.role is role] for role in Role}
+    rule = (lambda c: c.causality) if strict else (lambda c: c.type.causality)  # noqa: E731
 
     # A junction with a single bond fixes that bond's causality as a source does (a
-    # 0-junction sets its flow to zero, a 1-junction its effort): it goes first too.
+    # 0-junction sets its flow to zero, a 1-junction its effort): it goes first too; so
+    # does an R, C or I whose relation can be used one way only.
     ends = [c for c in by_role[Role.JUNCTION] if len(graph.ports(c.name)) == 1]
     fixed = by_role[Role.SOURCE] + by_role[Role.MODULATED] + by_role[Role.DETECTOR]
-    for component in fixed + ends:
+    one_way = [
+        c
+        for c in by_role[Role.STORAGE] + by_role[Role.RESISTOR]
+        if rule(c).kind is CausalKind.FIXED
+    ]
+    for component in fixed + ends + one_way:
         port = graph.ports(component.name)[0].bond
         try:
-            state.choose(component.name, port, component.type.causality.imposes_effort)
+            state.choose(component.name, port, rule(component).imposes_effort)
         except _Conflict as conflict:
             raise _model_error(graph, conflict) from None
 

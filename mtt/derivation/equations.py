@@ -27,7 +27,7 @@ from mtt.derivation.forms import Form, eliminate, solve, substitute
 from mtt.derivation.parameters import Parametrisation
 from mtt.language.bondgraph import Component
 from mtt.language.components import ComponentType, PortVariables, Role
-from mtt.language.diagnostics import ModelError, error
+from mtt.language.diagnostics import Diagnostic, ModelError, error
 
 INPUT, OUTPUT = "u", "y"
 
@@ -45,6 +45,7 @@ class Equations:
     C: DomainMatrix
     D: DomainMatrix
     budget: Budget = DEFAULT_BUDGET  # how large the transfer stage may let polynomials grow
+    notes: tuple[Diagnostic, ...] = ()  # warnings about how they were made (linearisation)
 
     def matrices(self) -> dict[str, sympy.Matrix]:
         """E, A, B, C, D as exact sympy matrices."""
@@ -86,7 +87,7 @@ def _parameter_values(causal: CausalBondGraph, parametrisation: Parametrisation)
     return values, held
 
 
-def _coefficient_domain(held: Constants, free: tuple[str, ...], graph, values) -> Domain:
+def coefficient_domain(held: Constants, free: tuple[str, ...], graph, values) -> Domain:
     """The field of rational functions in the free parameters and the constants' variables,
     over QQ or the algebraic number field of the model's roots (a field too large is
     reported at the first component whose value holds one of them)."""
@@ -138,8 +139,9 @@ def _port_variables(
     )
 
 
-def _outputs(causal: CausalBondGraph, component: Component, v: PortVariables) -> list[str]:
-    """The variables a component imposes under its causality."""
+def imposed(causal: CausalBondGraph, component: Component, v: PortVariables) -> list[str]:
+    """The variables a component imposes under its causality (its state's rate, or its
+    energy variable in derivative causality, and the output included)."""
     ports = causal.bondgraph.ports(component.name)
     names = [
         e if causal.imposes_effort(component.name, p.bond) else f
@@ -165,7 +167,7 @@ def derive(
     graph = causal.bondgraph
     values, held = _parameter_values(causal, parametrisation)
     signals = {c.name: _signals(graph, c, values.get(c.name)) for c in graph.components}
-    K = _coefficient_domain(held, parametrisation.free, graph, values)
+    K = coefficient_domain(held, parametrisation.free, graph, values)
     explicit: dict[str, Form] = {}
     extra: list[str] = []
     constraints: list[Form] = []
@@ -179,7 +181,7 @@ def derive(
 
     for component in graph.components:
         v = _port_variables(causal, component, values.get(component.name), signals[component.name])
-        solved, free, left = _solved(component, v, _outputs(causal, component, v), relation)
+        solved, free, left = _solved(component, v, imposed(causal, component, v), relation)
         explicit.update(solved)
         extra += free
         constraints += left

@@ -38,6 +38,10 @@ class ParameterChoice:
     input: str | None = None  # TYPE:NAME, over the file's `input` statement
     output: str | None = None
     budget: Budget = DEFAULT_BUDGET
+    # a nonlinear model's operating point: values of u and of states by name (exact), and
+    # which steady state when there are several (1-based); None: the model as it is
+    at: MappingProxyType | None = None
+    branch: int | None = None
 
     @property
     def selection(self) -> Selection:

@@ -2,10 +2,15 @@
 
 from __future__ import annotations
 
+from dataclasses import replace
 from pathlib import Path
 
+from mtt.derivation import nonlinear, operating
 from mtt.derivation.equations import Equations, derive
+from mtt.derivation.nonlinear import nonlinear_model_error
+from mtt.derivation.operating import values
 from mtt.derivation.parameters import ParameterChoice, parametrise
+from mtt.derivation.small_signal import small_signal
 from mtt.derivation.structure import causal_for
 from mtt.derivation.theta import Theta, theta_matrix
 from mtt.derivation.transfer import TransferFunction, transfer_function
@@ -33,8 +38,42 @@ NO_UNKNOWN = error(
 def equations_for(
     graph: BondGraph, choice: ParameterChoice = DEFAULT_CHOICE, identify: bool = False
 ) -> Equations:
-    """Bond graph -> causal bond graph -> equations, with the parameters as chosen."""
-    return derive(causal_for(graph, identify), parametrise(graph, choice), choice.budget)
+    """Bond graph -> causal bond graph -> equations, with the parameters as chosen; for a
+    nonlinear model, those of its small-signal model at the operating point `choice.at`."""
+    problem = nonlinear_model_error(graph)
+    if problem is None:
+        return derive(causal_for(graph, identify), parametrise(graph, choice), choice.budget)
+    if choice.at is None:
+        raise problem
+    return linearised_for(graph, choice, identify)[2]
+
+
+def linearised_for(
+    graph: BondGraph, choice: ParameterChoice, identify: bool = False
+) -> tuple[nonlinear.NonlinearStateSpace, operating.SmallSignal, Equations]:
+    """Bond graph -> state equations -> the small-signal model at the operating point
+    `choice.at`, and its equations for the linear chain."""
+    causal = causal_for(graph, identify)
+    parametrisation = parametrise(graph, choice)
+    system = nonlinear.derive(causal, parametrisation)
+    small = operating.linearise(system, operating.point(choice), values(parametrisation))
+    equations = small_signal(
+        causal,
+        parametrisation,
+        tuple(x.name for x in system.states),
+        {"A": small.A, "B": small.B, "C": small.C, "D": small.D},
+        small.notes,
+    )
+    return system, small, replace(equations, budget=choice.budget)
+
+
+def state_equations_for(
+    graph: BondGraph, choice: ParameterChoice = DEFAULT_CHOICE
+) -> tuple[nonlinear.NonlinearStateSpace, dict]:
+    """Bond graph -> x' = f(x, u), y = g(x, u) (any model, linear or not), with the file's
+    values of the parameters that stay symbolic (for numbers and signs)."""
+    parametrisation = parametrise(graph, choice)
+    return nonlinear.derive(causal_for(graph), parametrisation), values(parametrisation)
 
 
 def transfer_for(path: str | Path, choice: ParameterChoice = DEFAULT_CHOICE) -> TransferFunction:

@@ -42,23 +42,39 @@ def _arrows(causal: CausalBondGraph, component: Component) -> list[tuple[tuple, 
     (or its signals, or nothing: a source set to zero), a detector's from nothing."""
     graph, name, role = causal.bondgraph, component.name, component.type.role
     imposed, received = _imposed(causal, name), _received(causal, name)
+    read = _read(graph, component)
     if role is Role.SOURCE:
         sources = [INPUT] if name == graph.input else []
     elif role is Role.MODULATED:
-        sources = [(use.kind, graph.reading(use.target)) for use in component.argument.signals]
+        sources = read
     elif role is Role.DETECTOR:  # imposes a zero; the output reads the other variable
         return [(v, OUTPUT) for v in received] if name == graph.output else []
     elif role is Role.STORAGE:  # the state and its rate, both ways (integral or derivative)
         state = [("x", name), ("dx", name)]
         return [(a, b) for a in received + state for b in imposed + state if a != b]
     elif role is Role.JUNCTION or component.type.name == "TF":  # efforts to efforts
-        return [(a, b) for kind in "ef" for a in received if a[0] == kind
+        same = [(a, b) for kind in "ef" for a in received if a[0] == kind
                 for b in imposed if b[0] == kind]  # fmt: skip
+        return same + [(a, b) for a in read for b in imposed]  # a modulated TF's signals
     elif component.type.name == "GY":
-        return [(a, b) for a in received for b in imposed if a[0] != b[0]]
+        return [(a, b) for a in received for b in imposed if a[0] != b[0]] + [
+            (a, b) for a in read for b in imposed
+        ]
     else:  # a resistor: its effort and flow
         sources = received
     return [(a, b) for a in sources for b in imposed]
+
+
+def _read(graph: BondGraph, component: Component) -> list[tuple]:
+    """The bond variables the signals in a component's argument read: q(X) and p(X), the
+    integrals of f(X) and e(X), are computed from them."""
+    if component.argument is None or not component.argument.signals:
+        return []
+    integral = {"q": "f", "p": "e"}
+    return [
+        (integral.get(use.kind, use.kind), graph.reading(use.target))
+        for use in component.argument.signals
+    ]
 
 
 Flow = dict[tuple, set[tuple]]  # variable -> the variables computed from it
@@ -108,9 +124,12 @@ def _unknowns_in(graph: BondGraph) -> dict[str, set[str]]:
 
 
 def _entering(graph: BondGraph, component: Component, brought: dict) -> set[str]:
-    if component.argument is None:
+    if component.argument is not None:
+        names = {use.name for use in component.argument.names}
+    elif component.relation is not None:
+        names = {use.name for r in component.relation.given for use in r.expression.names}
+    else:
         return set()
-    names = {use.name for use in component.argument.names}
     return {u for name in names if name in brought for u in brought[name]}
 
 

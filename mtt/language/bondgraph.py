@@ -239,6 +239,9 @@ def values_problems(parameters: dict, components, symbolic, overrides=None) -> l
     values = {name: p.value for name, p in parameters.items()}
     values.update(overrides or {})
     arguments = [c.argument for c in components if c.argument is not None]
+    arguments += [
+        r.expression for c in components if c.nonlinear_relation for r in c.relation.given
+    ]
     return check_values(values, (), ()) + check_values(values, symbolic, arguments)
 
 

@@ -20,11 +20,23 @@ from mtt.language.elements import Component, LocalBond, Parameter, signal_readab
 from mtt.language.expressions import RESERVED, Expression, name_expression
 from mtt.language.parse import ComponentUse, ParsedModel, PortUse
 from mtt.language.ports import SubsystemRules
+from mtt.language.relations import Constitutive, linear_parameter, relation_problems
 from mtt.language.subsystems import Instance
 
 
 def _article(noun: str) -> str:
     return "an" if noun[0] in "aeiou" else "a"
+
+
+def _given(use: ComponentUse) -> Position | None:
+    """Where a mention's argument or relation is, if it has one."""
+    if use.relations:
+        return use.relations[0].position
+    return None if use.argument is None else use.argument.position
+
+
+def _reads_signals(component: Component) -> bool:
+    return component.type.modulated or component.type.modulable
 
 
 def _implied_argument(use: ComponentUse) -> Expression:
@@ -124,16 +136,19 @@ class FileCheck(SubsystemRules):
                         use.position,
                     )
                 continue
-            if use.argument is not None:
+            if _given(use) is not None:
                 self._check_argument(use, kind, argument_at)
             if seen is None:
+                argument, relation = self._relation(use, kind)
                 self.components[use.name] = Component(
-                    use.name, kind, use.argument, use.position, descriptions.get(use.name)
+                    use.name, kind, argument, use.position, descriptions.get(use.name), relation
                 )
-            elif use.argument is not None and seen.argument is None:
+            elif _given(use) is not None and seen.argument is None and seen.relation is None:
+                argument, relation = self._relation(use, kind)
                 self.components[use.name] = Component(
-                    seen.name, kind, use.argument, seen.position, seen.description
+                    seen.name, kind, argument, seen.position, seen.description, relation
                 )
+        related = {use.name for use in self.parsed.mentions if use.relations}
         for name, component in self.components.items():
             if component.type.role is Role.PORT and not self.ports_allowed:
                 self.report(
@@ -149,7 +164,9 @@ class FileCheck(SubsystemRules):
                     f"such as {component.type.name}:{name}(2*e(x))",
                     component.position,
                 )
-            elif component.type.takes_argument and component.argument is None:
+            elif (
+                component.type.takes_argument and component.argument is None and name not in related
+            ):
                 use = ComponentUse(component.type.name, name, None, component.position)
                 self.components[name] = Component(
                     name,
@@ -164,31 +181,72 @@ class FileCheck(SubsystemRules):
             self.report(
                 "bad_argument",
                 f"{use.label} takes no argument: it is {_article(kind.summary)} {kind.summary}",
-                use.argument.position,
+                _given(use),
             )
         elif use.name in seen:
             self.report(
                 "duplicate_argument",
                 f"the argument of {use.label} is already given on line {seen[use.name].line}",
-                use.argument.position,
+                _given(use),
             )
         else:
-            seen[use.name] = use.argument.position
+            seen[use.name] = _given(use)
+
+    def _relation(
+        self, use: ComponentUse, kind: ComponentType
+    ) -> tuple[Expression | None, Constitutive | None]:
+        """The argument and the constitutive relation of a mention: a relation that is
+        linear through the origin gives the argument (its parameter) too. A relation
+        that breaks a rule is reported (`bad_relation`) and the component has none."""
+        if not use.relations:
+            return use.argument, None
+        if not kind.takes_argument:
+            return None, None  # reported as an argument it does not take
+        if kind.relates is None:
+            self.report(
+                "bad_relation",
+                f"{use.label} takes a value, not a relation: only R, C and I have "
+                "constitutive relations written VAR = EXPR",
+                use.relations[0].position,
+            )
+            return None, None
+        problems = relation_problems(use.label, use.name, kind, use.relations)
+        for message, position in problems:
+            self.report("bad_relation", message, position)
+        if problems:
+            return None, None
+        relation = Constitutive(use.relations, kind.relates)
+        return linear_parameter(use.relations[0], kind.relates), relation
 
     def _expressions(self) -> list[Expression]:
-        """Every expression in this file's scope but the modulated sources' arguments."""
+        """Every expression in this file's scope that reads no signal: all but the
+        arguments of modulated sources and two-ports, and relations."""
         expressions = [p.value for p in self.parameters.values() if p.value is not None]
         expressions += [
             c.argument
             for c in self.components.values()
-            if c.argument is not None and not c.type.modulated
+            if c.argument is not None and not _reads_signals(c)
         ]
         expressions += [b.value for d in self.parsed.subsystems for b in d.bindings]
         return expressions
 
+    def _reading(self) -> list[Expression]:
+        """The expressions that may read signals: modulated arguments and relations."""
+        read = [c.argument for c in self.components.values() if _reads_signals(c)]
+        for c in self.components.values():
+            if c.relation is not None:
+                read += [r.expression for r in c.relation.given]
+        # a relation that broke a rule still has its parameters checked
+        read += [
+            r.expression
+            for use in self.parsed.mentions
+            for r in use.relations
+            if self.components.get(use.name) is None or self.components[use.name].relation is None
+        ]
+        return [m for m in read if m is not None]
+
     def check_names(self) -> None:
-        modulations = [c.argument for c in self.components.values() if c.type.modulated]
-        for expression in self._expressions() + [m for m in modulations if m is not None]:
+        for expression in self._expressions() + self._reading():
             for use in expression.names:
                 if use.name in self.parameters:
                     continue
@@ -204,17 +262,19 @@ class FileCheck(SubsystemRules):
                 )
 
     def check_signals(self) -> None:
-        """Signal terms only in modulated sources' arguments, each a linear combination of
-        signals of components that have them (a subsystem's, dotted, are checked later)."""
+        """Signals only in the arguments of modulated sources and two-ports (any function of
+        them) and in relations, each of a component that has it (a subsystem's, dotted,
+        are checked later)."""
         for component in self.components.values():
-            if component.type.modulated and component.argument is not None:
+            if _reads_signals(component) and component.argument is not None:
                 self._check_modulation(component.argument)
         for expression in self._expressions():
             if expression.signals:
                 self.report(
                     "bad_signal",
                     f"{expression.signals[0].text} is a signal: signals are read only in the "
-                    "argument of an MSe or MSf",
+                    "argument of an MSe, MSf, TF or GY (and an R, C or I relates its own "
+                    "variables in a relation, VAR = EXPR)",
                     expression.signals[0].position,
                 )
             elif expression.signal_problem:
@@ -222,16 +282,9 @@ class FileCheck(SubsystemRules):
                 self.report("bad_signal", problem.message, problem.position)
 
     def _check_modulation(self, argument: Expression) -> None:
-        if argument.signal_problem:
+        if argument.signal_problem and argument.signal_problem.malformed:
             problem = argument.signal_problem
             self.report("bad_signal", problem.message, problem.position)
-        elif not argument.signals:
-            self.report(
-                "bad_signal",
-                "no signal term: a modulated source's argument is a combination of signals "
-                "e(X) and f(X) with coefficients",
-                argument.position,
-            )
         for use in argument.signals:
             if "." in use.target:
                 continue

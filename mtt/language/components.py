@@ -93,7 +93,11 @@ class ComponentType:
     relation: Relation | None  # None for SS, which is never in an assembled bond graph
     energy_prefix: str | None = None  # the letter of a storage element's energy variable
     conventional_inward: bool | None = None  # for one-ports: the usual bond direction
-    modulated: bool = False  # its argument, required, is a linear combination of signals
+    modulated: bool = False  # its argument, required, is a function of signals
+    # the variables its constitutive relation relates, (y, x) with y = k x for its linear
+    # parameter k (R: e = r f; C: q = c e; I: p = i f); None: it takes no relation
+    relates: tuple[str, str] | None = None
+    modulable: bool = False  # its argument may read signals (TF, GY): a modulated two-port
 
 
 def _integer(value: int) -> sympy.Integer:
@@ -206,19 +210,20 @@ LIBRARY: dict[str, ComponentType] = {
         ComponentType("Df", "flow detector", Role.DETECTOR, PortRule.ONE, False,
                       _FIXED_EFFORT, _detector(reads_effort=False), conventional_inward=True),
         ComponentType("R", "resistor", Role.RESISTOR, PortRule.ONE, True,
-                      CausalRule(CausalKind.FREE), _resistor, conventional_inward=True),
+                      CausalRule(CausalKind.FREE), _resistor, conventional_inward=True,
+                      relates=("e", "f")),
         ComponentType("C", "capacitor (compliance)", Role.STORAGE, PortRule.ONE, True,
                       CausalRule(CausalKind.PREFERRED, imposes_effort=True),
                       _storage(stored_by_effort=True), energy_prefix="q",
-                      conventional_inward=True),
+                      conventional_inward=True, relates=("q", "e")),
         ComponentType("I", "inertia (inductance)", Role.STORAGE, PortRule.ONE, True,
                       CausalRule(CausalKind.PREFERRED, imposes_effort=False),
                       _storage(stored_by_effort=False), energy_prefix="p",
-                      conventional_inward=True),
+                      conventional_inward=True, relates=("p", "f")),
         ComponentType("TF", "transformer", Role.TWO_PORT, PortRule.TWO, True,
-                      CausalRule(CausalKind.OPPOSITE), _transformer),
+                      CausalRule(CausalKind.OPPOSITE), _transformer, modulable=True),
         ComponentType("GY", "gyrator", Role.TWO_PORT, PortRule.TWO, True,
-                      CausalRule(CausalKind.SAME), _gyrator),
+                      CausalRule(CausalKind.SAME), _gyrator, modulable=True),
         ComponentType("0", "0-junction (common effort)", Role.JUNCTION, PortRule.ANY, False,
                       CausalRule(CausalKind.EXACTLY_ONE, imposes_effort=False),
                       _junction(common_effort=True)),

@@ -136,7 +136,7 @@ class ExpressionRules(Transformer_NonRecursive):
     def _signal(self, token: Token, target: str | None, where: Position) -> Expression:
         if target is None:
             problem = SignalProblem(
-                f"{token}(...) reads a signal: its argument is a component's name", where
+                f"{token}(...) reads a signal: its argument is a component's name", where, True
             )
             return Expression(Placeholder(self.at(token)), (), self.at(token), (), problem)
         use = SignalUse(str(token), target, self.at(token))
@@ -145,9 +145,10 @@ class ExpressionRules(Transformer_NonRecursive):
     # functions
 
     def call(self, children):
-        token, argument = children
+        token, *arguments = children
         where, function = self.at(token), str(token)
-        if function in SIGNALS:
+        if function in SIGNALS and len(arguments) == 1:
+            (argument,) = arguments
             bare = isinstance(argument.tree, Name) and not argument.signals
             return self._signal(token, argument.tree.name if bare else None, argument.position)
         if function not in FUNCTIONS:
@@ -155,13 +156,18 @@ class ExpressionRules(Transformer_NonRecursive):
             self.problems.append(
                 error("syntax", f"unknown function {function!r} (known: {known})", where)
             )
-            return argument
+            return self._placeholder(where, *arguments)
+        wanted = FUNCTIONS[function]
+        if (wanted or 2) > len(arguments) or (wanted and len(arguments) > wanted):
+            count = "one argument" if wanted == 1 else "two or more arguments"
+            self.problems.append(error("syntax", f"{function} takes {count}", where))
+            return self._placeholder(where, *arguments)
         return self._build(
-            lambda: measures.call(function, argument.measure, where),
-            lambda _: Call(where, function, argument.tree),
+            lambda: measures.call(function, [a.measure for a in arguments], where),
+            lambda _: Call(where, function, tuple(a.tree for a in arguments)),
             where,
-            [argument],
-            _nonlinear("a signal inside a function", argument),
+            arguments,
+            _nonlinear("a signal inside a function", *arguments),
         )
 
     def signal_path(self, children):

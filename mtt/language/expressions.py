@@ -7,8 +7,9 @@ importing sympy. A stage that computes (the derivation, reports) asks for `value
 exact sympy object, built node by node from the tree: no text from a model ever reaches
 eval, exec, sympify or parse_expr.
 
-Signal terms `e(X)` and `f(X)` (the argument of a modulated source) become the Symbols
-`e(X)` and `f(X)`, which no parameter can be called.
+Signal terms `e(X)`, `f(X)`, `q(X)` and `p(X)` (in the argument of a modulated source,
+TF or GY, and a component's own variables in its constitutive relation) become the
+Symbols `e(X)`, `f(X)`, `q(X)`, `p(X)`, which no parameter can be called.
 """
 
 from __future__ import annotations
@@ -23,11 +24,21 @@ from mtt.language.diagnostics import Position
 if TYPE_CHECKING:
     import sympy
 
-FUNCTIONS = ("sqrt", "exp", "log", "sin", "cos")
+# the functions a model may call, with their number of arguments (None: two or more)
+FUNCTIONS = {
+    "sqrt": 1, "exp": 1, "log": 1, "sin": 1, "cos": 1, "tan": 1, "tanh": 1, "atan": 1,
+    "abs": 1, "sign": 1, "sat": 1, "min": None, "max": None,
+}  # fmt: skip
+# functions only derivation writes (the inverses of relations), never read from a model
+INVERSES = ("asin", "acos", "atanh")
 CONSTANTS = ("pi",)
-SIGNALS = {"e": "effort", "f": "flow"}
+# e(X) and f(X) read a bond's variables; q(X) and p(X) their time integrals (a C's or an
+# I's state, or a state of their own)
+SIGNALS = {"e": "effort", "f": "flow", "q": "displacement", "p": "momentum"}
 LAPLACE = "s"
-RESERVED = frozenset({LAPLACE, *FUNCTIONS, *CONSTANTS})
+# the names version 2 reserved; the functions added since may also name parameters (a
+# call and a name are told apart by the parenthesis), so that no version 2 model breaks
+RESERVED = frozenset({LAPLACE, "sqrt", "exp", "log", "sin", "cos", *CONSTANTS})
 
 
 @dataclass(frozen=True)
@@ -61,6 +72,7 @@ class SignalProblem:
 
     message: str
     position: Position
+    malformed: bool = False  # a signal badly written (else: only where linearity ends)
 
 
 # The tree --------------------------------------------------------------------------
@@ -95,7 +107,12 @@ class Signal(Node):
 @dataclass(frozen=True)
 class Call(Node):
     function: str
-    argument: Node
+    arguments: tuple[Node, ...]
+
+    @property
+    def argument(self) -> Node:
+        """The first (for most functions, the only) argument."""
+        return self.arguments[0]
 
 
 @dataclass(frozen=True)
@@ -154,7 +171,7 @@ def text(node: Node) -> str:
     if isinstance(node, Signal):
         return f"{node.kind}({node.target})"
     if isinstance(node, Call):
-        return f"{node.function}({text(node.argument)})"
+        return f"{node.function}({', '.join(text(a) for a in node.arguments)})"
     if isinstance(node, Negative):
         return "-" + _wrapped(node.operand, (Product, Power))
     if isinstance(node, Sum):
@@ -182,6 +199,21 @@ def text(node: Node) -> str:
 # Conversion to sympy ---------------------------------------------------------------
 
 
+def _saturation(x: sympy.Expr) -> sympy.Expr:
+    """sat(x) = x / sqrt(1 + x^2): a smooth saturation, odd, of slope 1 at 0, tending to
+    -1 and 1 (written out, so that it differentiates and prints as itself)."""
+    import sympy
+
+    return x / sympy.sqrt(1 + x**2)
+
+
+def _sympy_function(name: str):
+    import sympy
+
+    special = {"abs": sympy.Abs, "min": sympy.Min, "max": sympy.Max, "sat": _saturation}
+    return special.get(name) or getattr(sympy, name)
+
+
 def to_sympy(node: Node) -> sympy.Expr:
     """The exact sympy value of a tree (the tree is at most `MAX_DEPTH` deep)."""
     import sympy
@@ -195,7 +227,7 @@ def to_sympy(node: Node) -> sympy.Expr:
     if isinstance(node, Signal):
         return sympy.Symbol(f"{node.kind}({node.target})")
     if isinstance(node, Call):
-        return getattr(sympy, node.function)(to_sympy(node.argument))
+        return _sympy_function(node.function)(*(to_sympy(a) for a in node.arguments))
     if isinstance(node, Negative):
         return -to_sympy(node.operand)
     if isinstance(node, Sum):
@@ -225,7 +257,7 @@ def rename(node: Node, names: dict[str, str], signals: dict[str, str], where) ->
     if isinstance(node, Signal):
         return Signal(position, node.kind, signals.get(node.target, node.target))
     if isinstance(node, Call):
-        return Call(position, node.function, again(node.argument))
+        return Call(position, node.function, tuple(again(a) for a in node.arguments))
     if isinstance(node, Negative):
         return Negative(position, again(node.operand))
     if isinstance(node, Sum):

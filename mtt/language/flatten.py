@@ -10,7 +10,7 @@ parent's, into one bond between their other ends (the parent's bond gives the pl
 from __future__ import annotations
 
 from collections import defaultdict
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from itertools import count
 
 from mtt.language.checks import FileCheck
@@ -18,6 +18,7 @@ from mtt.language.components import Role
 from mtt.language.diagnostics import Diagnostic, Origin, Position, error
 from mtt.language.elements import Component, Parameter, signal_readable, unreadable
 from mtt.language.expressions import Expression, SignalUse, renamed
+from mtt.language.relations import Constitutive
 from mtt.language.subsystems import Instance, relocate
 
 
@@ -54,6 +55,15 @@ class _Renamer:
             return expression
         return renamed(expression, self.prefix, self.parameters, self.position)
 
+    def relation(self, relation: Constitutive | None) -> Constitutive | None:
+        if relation is None or not self.prefix:
+            return relation
+        given = tuple(
+            replace(r, expression=self.expression(r.expression), position=self.position(r.position))
+            for r in relation.given
+        )
+        return replace(relation, given=given)
+
 
 class _Assembler:
     def __init__(self, checks: dict[str, FileCheck]):
@@ -80,9 +90,14 @@ class _Assembler:
         for name, c in check.components.items():
             argument = rename.expression(c.argument)
             self.components[prefix + name] = Component(
-                prefix + name, c.type, argument, rename.position(c.position), c.description
+                prefix + name,
+                c.type,
+                argument,
+                rename.position(c.position),
+                c.description,
+                rename.relation(c.relation),
             )
-            if c.type.modulated and c.argument is not None:
+            if (c.type.modulated or c.type.modulable) and c.argument is not None:
                 self.signals += [
                     (prefix + u.target, SignalUse(u.kind, u.target, rename.position(u.position)))
                     for u in c.argument.signals

@@ -265,6 +265,10 @@ def power(base: Measure, exponent: Measure, where: Position) -> Measure:
 def _function_value(function: str, value: Fraction, where: Position) -> Fraction | None:
     """The rational value of a function of a rational number, when there is one;
     `Problem` for an argument out of range or outside the function's domain."""
+    if function == "abs":
+        return abs(value)
+    if function == "sign":
+        return Fraction((value > 0) - (value < 0))
     if _digits(value) > MAX_ROOT_DIGITS:
         raise Problem("syntax", f"argument of {function} out of range", where)
     if function == "sqrt":
@@ -280,12 +284,22 @@ def _function_value(function: str, value: Fraction, where: Position) -> Fraction
             raise Problem("bad_value", message, where)
         return Fraction(0) if value == 1 else None
     if value == 0:
-        return Fraction(0) if function == "sin" else Fraction(1)
+        return Fraction(1) if function in ("exp", "cos") else Fraction(0)
     return None
 
 
-def call(function: str, argument: Measure, where: Position) -> Measure:
-    """function(argument), for sqrt exp log sin cos (`where`: the function's name)."""
+_APPROX = {
+    "abs": abs,
+    "sign": lambda x: float((x > 0) - (x < 0)),
+    "sat": lambda x: x / math.sqrt(1 + x * x) if abs(x) < 1e150 else math.copysign(1.0, x),
+}
+
+
+def call(function: str, arguments: list[Measure], where: Position) -> Measure:
+    """function(arguments), for the language's functions (`where`: the function's name)."""
+    if function in ("min", "max"):
+        return _extremum(function, arguments, where)
+    (argument,) = arguments
     if argument.exact is not None:
         value = _function_value(function, argument.exact, where)
         if value is not None:
@@ -296,8 +310,25 @@ def call(function: str, argument: Measure, where: Position) -> Measure:
         raise Problem("syntax", message, where)
     # an irrational argument's sign is decided exactly, later
     if x is not None and (x > 0 or function not in ("sqrt", "log")) and math.isfinite(x):
-        approx = getattr(math, function)(x)
+        try:
+            approx = _APPROX.get(function, getattr(math, function, None))(x)
+        except (OverflowError, ValueError):  # tan near a pole, say: no estimate
+            approx = None
     depth, size = argument.depth + 1, argument.size + 1
+    return check(Measure(approx=approx, degree=(1, 0), depth=depth, size=size), where)
+
+
+def _extremum(function: str, arguments: list[Measure], where: Position) -> Measure:
+    """min or max of two or more values: exact when all are rational numbers."""
+    exact = [m.exact for m in arguments]
+    if all(x is not None for x in exact):
+        return rational(min(exact) if function == "min" else max(exact), where)
+    values = [_float(m) for m in arguments]
+    approx = None
+    if all(x is not None for x in values):
+        approx = min(values) if function == "min" else max(values)
+    depth = max(m.depth for m in arguments) + 1
+    size = sum(m.size for m in arguments) + 1
     return check(Measure(approx=approx, degree=(1, 0), depth=depth, size=size), where)
 
 
@@ -315,7 +346,8 @@ def _measure(node: Node, names: Callable[[str], Measure]) -> Measure:
     if isinstance(node, Constant):
         return PI
     if isinstance(node, Call):
-        return call(node.function, _measure(node.argument, names), node.position)
+        arguments = [_measure(a, names) for a in node.arguments]
+        return call(node.function, arguments, node.position)
     if isinstance(node, Power):
         base, exponent = _measure(node.base, names), _measure(node.exponent, names)
         return power(base, exponent, node.position)

@@ -21,6 +21,7 @@ from lark import Token
 from mtt.language.diagnostics import Diagnostic, ModelError, Position, Source, error
 from mtt.language.expression_rules import MAX_DIGITS, ExpressionRules
 from mtt.language.expressions import LAPLACE, RESERVED, Expression, NameUse, SignalUse
+from mtt.language.relations import Relation, written
 from mtt.resources import resource_dir
 
 if TYPE_CHECKING:
@@ -39,12 +40,13 @@ _BLANK = re.compile(r"[ \t\f\r\ufeff]*(?:#.*)?")  # what the grammar ignores: no
 
 @dataclass(frozen=True)
 class ComponentUse:
-    """One mention of `TYPE:NAME [(EXPR)]`, in a declaration or a bond."""
+    """One mention of `TYPE:NAME [(EXPR)]` or `TYPE:NAME (VAR = EXPR[, ...])`, anywhere."""
 
     type: str
     name: str
     argument: Expression | None
     position: Position
+    relations: tuple[Relation, ...] = ()  # a constitutive relation (and its inverse)
 
     @property
     def label(self) -> str:
@@ -212,9 +214,19 @@ class _ToModel(ExpressionRules):
     def unknown_stmt(self, children):
         return self._parameter(children, unknown=True)
 
+    def relation(self, children):
+        variable, value = children
+        return str(variable), self.at(variable), value
+
+    def relations(self, children):
+        return [child for child in children if child is not None]
+
     def component(self, children):
-        token, argument = children
+        token, *given = children  # an argument, relations, or nothing
+        argument = given[0] if given else None
         type_, _, name = str(token).partition(":")
+        if isinstance(argument, list):  # (variable, its place, the expression), in order
+            return ComponentUse(type_, name, None, self.at(token), written(argument, name))
         if "." in name:
             self.problems.append(
                 error(

@@ -268,7 +268,11 @@ def show_json(graph: BondGraph) -> dict:
             {
                 "name": c.name,
                 "type": c.type.name,
-                "argument": None if c.argument is None else str(c.argument.value),
+                "argument": c.relation.text()
+                if c.relation is not None
+                else None
+                if c.argument is None
+                else str(c.argument.value),
             }
             for c in graph.components
         ],  # fmt: skip

@@ -13,6 +13,14 @@ if TYPE_CHECKING:
     from mtt.language.parse import ParsedModel
 
 
+def _argument(component) -> str:
+    """A component's argument as shown: its constitutive relation when it is written as
+    one (version 3), else its exact value."""
+    if component.relation is not None:
+        return component.relation.text()
+    return "" if component.argument is None else str(component.argument.value)
+
+
 def check_record(
     file: str, parsed: ParsedModel | None, graph: BondGraph | None, problem: ModelError | None
 ) -> dict:
@@ -65,9 +73,7 @@ def describe(graph: BondGraph) -> str:
     rows = []
     for type_name in counts:
         members = [c for c in graph.components if c.type.name == type_name]
-        names = ", ".join(
-            c.name + (f"({c.argument.value})" if c.argument is not None else "") for c in members
-        )
+        names = ", ".join(c.name + (f"({_argument(c)})" if _argument(c) else "") for c in members)
         rows.append((type_name, members[0].type.summary, names))
     lines += rows_text(rows)
     lines += ["", f"bonds ({len(graph.bonds)}, tail -> head is the direction of positive power)"]
