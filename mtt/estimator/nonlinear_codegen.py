@@ -210,6 +210,7 @@ def _context(
         "n": len(system.states),
         "p": p,
         "r": len(jumps),
+        "kinks": len(frozen.switches) - len(jumps),
     }
 
 
