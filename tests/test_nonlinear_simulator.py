@@ -7,6 +7,7 @@ differences of its simulations."""
 from __future__ import annotations
 
 import math
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -14,6 +15,7 @@ import sympy
 from nonlinear_models import PENDULUM_K, TWO_TANKS_K, pendulum, two_tanks, weir_tanks
 from scipy.integrate import solve_ivp
 
+import mtt
 from mtt.derivation.nonlinear import NonlinearStateSpace
 from mtt.estimator import nonlinear_codegen
 from mtt.language.diagnostics import ModelError
@@ -23,12 +25,12 @@ TANKS_VALUES = dict(zip(("c1", "c2", "kp"), TWO_TANKS_K, strict=True))
 
 @pytest.fixture(scope="module")
 def tanks():
-    return nonlinear_codegen.load(two_tanks(), true_values=TANKS_VALUES)
+    return nonlinear_codegen.load(two_tanks(), values=TANKS_VALUES)
 
 
 @pytest.fixture(scope="module")
 def arm():
-    return nonlinear_codegen.load(pendulum(), true_values=dict(J=0.05, fc=0.1))
+    return nonlinear_codegen.load(pendulum(), values=dict(J=0.05, fc=0.1))
 
 
 def _record(n: int = 401, span: float = 200.0, period: int = 40, seed: int = 0):
@@ -100,7 +102,7 @@ def test_a_weir_over_the_rim_is_simulated_through_its_kink(hold):
     """20 max(h1 - 30, 0)^(3/2): the branch over the rim has no value below it, so the
     integrators may not step past the surface on it (they approach it); many sets at
     once as well."""
-    module = nonlinear_codegen.load(weir_tanks(), true_values={"a1": 2, "a2": 2.5})
+    module = nonlinear_codegen.load(weir_tanks(), values={"a1": 2, "a2": 2.5})
     t = np.linspace(0.0, 1500.0, 301)
     u = 8.0 + 6.0 * module.input_signal("prbs", t, period=150.0)
     x0 = [1000.0, 1000.0]
@@ -168,7 +170,7 @@ def test_sensitivities_agree_with_finite_differences(tanks, arm, hold):
 def test_sensitivities_jump_where_a_discontinuous_relation_switches():
     """sign friction, the arm swinging without sticking: crossings of w = 0, each with
     the jump of the sensitivities that the crossing time's shift makes."""
-    module = nonlinear_codegen.load(pendulum("sign"), true_values=dict(J=0.05, fc=0.1))
+    module = nonlinear_codegen.load(pendulum("sign"), values=dict(J=0.05, fc=0.1))
     t = np.linspace(0.0, 2.0, 101)
     u = 4.0 * np.cos(2 * np.pi * t)
     k, x0 = np.array(PENDULUM_K), np.array([0.0, 0.01, 0.0])
@@ -178,7 +180,7 @@ def test_sensitivities_jump_where_a_discontinuous_relation_switches():
 
 
 def test_stiction_is_reported_not_smoothed():
-    module = nonlinear_codegen.load(pendulum("sign"), true_values=dict(J=0.05, fc=0.1))
+    module = nonlinear_codegen.load(pendulum("sign"), values=dict(J=0.05, fc=0.1))
     t = np.linspace(0.0, 2.0, 201)
     with pytest.raises(module.SimulationError, match="sliding mode"):
         module.simulate(t, 0.05 * np.ones(t.size), x0=[0.0, 0.0, 0.0])
@@ -265,8 +267,8 @@ def test_the_rosenbrock_step_is_of_order_four(tanks):
 def test_generation_is_deterministic_and_splices_no_model_text():
     system = two_tanks()
     tricky = 'a """ docstring end\n and "quotes"'
-    first = nonlinear_codegen.render(system, true_values=TANKS_VALUES, description=tricky)
-    again = nonlinear_codegen.render(two_tanks(), true_values=TANKS_VALUES, description=tricky)
+    first = nonlinear_codegen.render(system, values=TANKS_VALUES, description=tricky)
+    again = nonlinear_codegen.render(two_tanks(), values=TANKS_VALUES, description=tricky)
     assert first == again
     assert tricky not in first and repr(tricky) in first
     compile(first, "two_tanks.py", "exec")
@@ -304,3 +306,35 @@ def test_arguments_are_checked(tanks):
         tanks.simulate(t, u, np.ones((3, 3)), x0=np.ones((2, 2)))
     with pytest.raises(ValueError, match="unexpected parameter"):
         tanks.simulate(t, u, area=2.0)
+
+
+def test_mtt_compile_writes_the_simulator_of_a_nonlinear_model(tmp_path, capsys):
+    """Without --at a nonlinear model compiles to its simulator, which runs as a user
+    imports it (a file, numpy and scipy only); with --at, to its small-signal estimator."""
+    import importlib.util
+    import json
+
+    from mtt.cli.main import main
+
+    root = Path(__file__).resolve().parent.parent
+    target = tmp_path / "two_tanks.py"
+    assert (
+        main(["compile", str(root / "models" / "two_tanks.bg"), "-o", str(target), "--json"]) == 0
+    )
+    written = json.loads(capsys.readouterr().out)
+    assert written["kind"] == "simulator" and written["unknowns"] == ["a1", "a2"]
+    spec = importlib.util.spec_from_file_location("two_tanks", target)
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    assert "import mtt" not in target.read_text() and module.TRUE_VALUE == (2.0, 2.5)
+    t = np.linspace(0.0, 600.0, 601)
+    api = mtt.load(root / "models" / "two_tanks.bg")
+    expected = api.simulator().simulate(t, np.full(t.size, 10.0), x0=[1000.0, 1000.0])
+    assert np.array_equal(module.simulate(t, np.full(t.size, 10.0), x0=[1000.0, 1000.0]), expected)
+    (tmp_path / "api").mkdir()
+    assert api.compile(tmp_path / "api").name == "two_tanks.py"
+    assert "Simulate the nonlinear model" in (tmp_path / "api" / "two_tanks.py").read_text()
+    linear = tmp_path / "small.py"
+    args = ["compile", str(root / "models" / "two_tanks.bg"), "--at", "u=10", "-o", str(linear)]
+    assert main(args) == 0
+    assert linear.read_text().startswith('"""Identify the unknown parameters a1, a2')

@@ -26,7 +26,7 @@ from mtt.derivation.identifiability import Identifiability, identifiability
 from mtt.derivation.nonlinear import nonlinear_parts
 from mtt.derivation.parameters import ParameterChoice
 from mtt.derivation.transfer import transfer_function
-from mtt.estimator import codegen
+from mtt.estimator import codegen, nonlinear_codegen
 from mtt.language.bondgraph import BondGraph
 from mtt.language.diagnostics import MttError, Source
 
@@ -225,7 +225,8 @@ class Model:
 
     def compile(self, path: str | Path) -> Path:
         """Write the standalone estimator module (numpy and scipy only) to `path`, or to
-        MODEL.py inside it when it is a directory; return the file written.
+        MODEL.py inside it when it is a directory; return the file written. For a
+        nonlinear model without an operating point, the module is its simulator.
 
         >>> import mtt, tempfile
         >>> with tempfile.TemporaryDirectory() as folder:
@@ -233,15 +234,46 @@ class Model:
         ...     print(path.name, path.read_text().splitlines()[0][3:])
         rlc.py Identify the unknown parameter c of the model rlc from input/output data.
         """
-        theta = self._checked_theta()
         try:
-            target = codegen.output_path(str(path), theta)
-            codegen.write_atomic(target, codegen.render(theta))
+            if self._simulates:  # a nonlinear model, no operating point: its simulator
+                system, values = self._system
+                target = nonlinear_codegen.output_path(str(path), system)
+                text = nonlinear_codegen.render(system, values=values, description=self.description)
+            else:
+                theta = self._checked_theta()
+                target = codegen.output_path(str(path), theta)
+                text = codegen.render(theta)
+            codegen.write_atomic(target, text)
         except (OSError, ValueError) as exc:
             name = getattr(exc, "filename", None) or str(path)
             reason = getattr(exc, "strerror", None) or str(exc)
             raise MttError(f"{name}: {reason}", kind="io", file=str(path)) from None
         return target
+
+    @property
+    def _simulates(self) -> bool:
+        """Whether the model's module is the nonlinear simulator (not an estimator)."""
+        return self.nonlinear and self.choice.at is None
+
+    @cached_property
+    def _simulator(self) -> ModuleType:
+        system, values = self._system
+        return nonlinear_codegen.load(system, values=values, description=self.description)
+
+    def simulator(self) -> ModuleType:
+        """The generated simulator of the state equations (docs/simulator.md): one record
+        or many parameter sets at once, with sensitivities to the unknowns and the
+        initial state; imported without writing a file, the module `compile` writes for a
+        nonlinear model.
+
+        >>> import mtt, numpy as np
+        >>> tanks = mtt.load(mtt.example("two_tanks")).simulator()
+        >>> t = np.linspace(0.0, 600.0, 601)
+        >>> run = tanks.sensitivities(t, np.full(t.size, 10.0), x0=[1000.0, 1000.0])
+        >>> run.y.shape, run.dy_dk.shape, round(float(run.y[-1]), 2)
+        ((601,), (601, 2), 15.57)
+        """
+        return self._simulator
 
     @cached_property
     def _estimator(self) -> ModuleType:
@@ -261,7 +293,8 @@ class Model:
         return self._estimator
 
     def simulate(self, t, u, k: object = None, **options):
-        """The generated module's `simulate(t, u, k, ...)`; k defaults to the file's value(s).
+        """The generated module's `simulate(t, u, k, ...)`; k defaults to the file's value(s)
+        (for a nonlinear model without an operating point, the simulator's: x0=, hold=...).
 
         >>> import mtt, numpy as np
         >>> rlc = mtt.load(mtt.example("rlc"))  # G(s) = 2cs / (cs^2 + 4cs + 2), c = 0.1
@@ -270,7 +303,7 @@ class Model:
         >>> round(float(y.max()), 3), round(float(y[-1]), 3)
         (0.257, 0.0)
         """
-        module = self._estimator
+        module = self._simulator if self._simulates else self._estimator
         k = module.TRUE_VALUE if k is None else k
         if k is None:
             raise MttError(

@@ -17,7 +17,8 @@ from mtt.cli.running import EXIT_OK, UsageError
 from mtt.data import default_hold, records
 from mtt.data.records import Record
 from mtt.derivation import pipeline
-from mtt.estimator import codegen
+from mtt.derivation.nonlinear import nonlinear_parts
+from mtt.estimator import codegen, nonlinear_codegen
 from mtt.present import tables
 
 
@@ -103,7 +104,12 @@ def signal_label(module: ModuleType, role: str) -> str:
 
 
 def cmd_compile(args) -> int:
-    theta = pipeline.theta_for(args.file, choice_from_args(args))
+    choice = choice_from_args(args)
+    if choice.at is None:
+        graph = pipeline.load(args.file, choice.selection)
+        if nonlinear_parts(graph):  # no operating point: the nonlinear model's simulator
+            return _compile_simulator(args, graph, choice)
+    theta = pipeline.theta_for(args.file, choice)
     source = codegen.render(theta)
     path = codegen.output_path(args.path, theta)
     codegen.write_atomic(path, source)
@@ -117,6 +123,28 @@ def cmd_compile(args) -> int:
     print(
         f"wrote {path}: estimator of {', '.join(theta.unknowns)} for {theta.model} "
         f"(n = {theta.n}, m = {theta.m}, N = {theta.N}{kept})"
+    )
+    return EXIT_OK
+
+
+def _compile_simulator(args, graph, choice) -> int:
+    """`mtt compile` of a nonlinear model: the simulator of its state equations, with
+    sensitivities (mtt.estimator.nonlinear_codegen; with --at, the small-signal model's
+    estimator instead)."""
+    system, values = pipeline.state_equations_for(graph, choice)
+    source = nonlinear_codegen.render(system, values=values, description=graph.description)
+    path = nonlinear_codegen.output_path(args.path, system)
+    codegen.write_atomic(path, source)
+    unknowns = [symbol.name for symbol in system.unknowns]
+    states = [symbol.name for symbol in system.states]
+    if args.json:
+        written = {"ok": True, "path": str(path), "model": system.name, "kind": "simulator"}
+        print(json.dumps(written | {"unknowns": unknowns, "states": states}))
+        return EXIT_OK
+    print(
+        f"wrote {path}: simulator of {system.name} ({len(states)} states: "
+        f"{', '.join(states)}), with sensitivities to {', '.join(unknowns) or 'no unknown'} "
+        "and the initial state (--at u=VALUE: the small-signal estimator instead)"
     )
     return EXIT_OK
 

@@ -325,26 +325,26 @@ def render(theta: Theta) -> str:
     return environment().get_template("estimator.py.j2").render(_context(theta))
 
 
-def default_path(theta: Theta) -> Path:
-    return Path("generated") / f"{theta.model}.py"
-
-
 def output_path(given: str | None, theta: Theta) -> Path:
-    """Where `mtt compile -o GIVEN` writes: generated/MODEL.py by default, MODEL.py inside
-    GIVEN when it is a directory (or ends with a slash), else GIVEN itself."""
+    """Where `mtt compile -o GIVEN` writes an estimator (`module_path`)."""
+    return module_path(given, theta.model, lambda text: _fail(theta, "reserved_name", text))
+
+
+def module_path(given: str | None, model: str, refuse) -> Path:
+    """Where `mtt compile -o GIVEN` writes the module of `model`: generated/MODEL.py by
+    default, MODEL.py inside GIVEN when it is a directory (or ends with a slash), else
+    GIVEN itself; `refuse(message)` is the error for a file that would shadow a module."""
     if given is None:
-        return default_path(theta)
+        return Path("generated") / f"{model}.py"
     if not given:
         raise ValueError("-o needs a file or a directory, not an empty name")
     path = Path(given)
     if path.is_dir() or given.endswith(("/", os.sep)):
-        return path / default_path(theta).name
-    if path.suffix == ".py" and path.stem != theta.model and shadows(path.stem):
-        raise _fail(
-            theta,
-            "reserved_name",
-            f"-o {given}: {path.stem} is the name of a Python module: the estimator module "
-            f"{path.name} would shadow it wherever it is imported; choose another file name",
+        return path / f"{model}.py"
+    if path.suffix == ".py" and path.stem != model and shadows(path.stem):
+        raise refuse(
+            f"-o {given}: {path.stem} is the name of a Python module: the module "
+            f"{path.name} would shadow it wherever it is imported; choose another file name"
         )
     return path
 

@@ -12,11 +12,13 @@ the model's names only ever in strings through repr.
 from __future__ import annotations
 
 import types
+from collections.abc import Mapping
+from pathlib import Path
 from typing import TYPE_CHECKING
 
 import sympy
 
-from mtt.estimator.codegen import environment, is_name, load_source, shadows
+from mtt.estimator.codegen import environment, is_name, load_source, module_path, shadows
 from mtt.estimator.kernels import SIDE, TIE, Frozen, KernelError, freeze, kernel
 from mtt.estimator.rosenbrock import sensitivity_kernel, step_kernel
 from mtt.language.diagnostics import ModelError, Source, error
@@ -149,10 +151,7 @@ def _float(value: sympy.Expr) -> float:
 
 
 def _context(
-    system: NonlinearStateSpace,
-    true_values: dict[str, sympy.Expr] | None,
-    defaults: dict[str, sympy.Expr] | None,
-    description: str | None,
+    system: NonlinearStateSpace, values: dict[str, sympy.Expr], description: str | None
 ) -> dict:
     kept = _kept(system)
     _check(system, kept)
@@ -163,12 +162,12 @@ def _context(
     jumps = [switch for switch in frozen.switches if not switch.continuous]
     unknowns = tuple(symbol.name for symbol in system.unknowns)
     p = len(unknowns)
-    given = {name: _float(value) for name, value in (true_values or {}).items()}
+    given = {name: _float(values[name]) for name in unknowns if values.get(name) is not None}
     complete = all(name in given for name in unknowns)
     values = [given[name] for name in unknowns] if complete else None
     true_float = repr(values and (values[0] if p == 1 else tuple(values)))
     example = repr(values[0] if p == 1 else values) if values else repr([1.0] * p)
-    defaults = {symbol.name: (defaults or {}).get(symbol.name) for symbol in kept}
+    defaults = {symbol.name: values.get(symbol.name) for symbol in kept}
     return {
         "version": __version__,
         "model": system.name,
@@ -221,17 +220,22 @@ def _maybe_float(value: sympy.Expr | None) -> float | None:
 def render(
     system: NonlinearStateSpace,
     *,
-    true_values: dict[str, sympy.Expr] | None = None,
-    defaults: dict[str, sympy.Expr] | None = None,
+    values: Mapping[str | sympy.Symbol, object] | None = None,
     description: str | None = None,
 ) -> str:
-    """The simulator module's source text for `system` (deterministic). `true_values`:
-    the model file's values of the unknowns (the module's default k); `defaults`: those
-    of the parameters kept symbolic."""
-    context = _context(system, true_values, defaults, description)
+    """The simulator module's source text for `system` (deterministic). `values`: the
+    model file's values of the unknowns (the module's default k) and of the parameters
+    kept symbolic (their defaults), by name or symbol, as the derivation gives them."""
+    named = {getattr(name, "name", name): value for name, value in (values or {}).items()}
+    context = _context(system, named, description)
     return environment().get_template("nonlinear/simulator.py.j2").render(context)
 
 
 def load(system: NonlinearStateSpace, **options) -> types.ModuleType:
     """The simulator module for `system`, imported without writing a file."""
     return load_source(system.name, render(system, **options))
+
+
+def output_path(given: str | None, system: NonlinearStateSpace) -> Path:
+    """Where `mtt compile -o GIVEN` writes the simulator (codegen.module_path)."""
+    return module_path(given, system.name, lambda message: _fail(system, "reserved_name", message))
