@@ -59,8 +59,7 @@ def test_a_pattern_fits_each_record(capsys, logs, dc_drive, tmp_path):
     assert errors == [f"mtt fit: error: {logs / CORRUPT}:18: column 'y' holds 'oops', not a number"]
     lines = text.stdout.splitlines()
     assert (
-        lines[0]
-        == "dc_drive: 12 records, one fit each (refined instrumental variables, in this process)"
+        lines[0] == "dc_drive: 12 records, one fit each (exact prediction error, in this process)"
     )
     assert lines[-1] == "  11 of 12 records fitted; 1 failed"
     assert f"{direct[paths[0]].k:.6g}" in lines[2] and "failed" in lines[2 + 7]

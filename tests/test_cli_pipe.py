@@ -47,6 +47,7 @@ def data(tmp_path_factory) -> Path:
 )
 def test_a_closed_pipe_ends_the_command_quietly(arguments, data):
     done = _to_closed_pipe([str(data) if a == "DATA" else a for a in arguments], ROOT)
-    # warnings about the made-up record may come; no traceback, no error
-    assert done.returncode == 0
-    assert "Traceback" not in done.stderr and "error" not in done.stderr, done.stderr
+    # warnings about the made-up record may come, and fit's status 1 (its ok is False: the
+    # model does not fit it); no traceback, no error
+    assert done.returncode in ((0, 1) if "fit" in arguments else (0,))
+    assert "Traceback" not in done.stderr and "error:" not in done.stderr, done.stderr

@@ -369,7 +369,14 @@ def test_fit_warnings_go_to_stderr(capsys):
         (["--dt", "5e-324"], "--t-end / --dt = inf samples is too many"),  # internal errors,
         (["--signal", "square", "--period", "1e-308"], "has more than 16777216 periods"),  # too
         # a LinAlgError from inside LAPACK, its complaints on stderr
-        (["--signal", "prbs", "--beta", "1e18"], "beta = 1e+18 weighs the start of a record"),
+        (
+            ["--signal", "prbs", "--beta", "1e18", "--method", "iv"],
+            "beta = 1e+18 weighs the start of a record",
+        ),
+        (
+            ["--signal", "prbs", "--beta", "0.1"],
+            "beta = 0.1: the exact fit (--method pem) weighs every sample",
+        ),
     ],
 )
 def test_fit_user_errors_exit_2(args, message, tmp_path, monkeypatch, capsys):

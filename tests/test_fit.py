@@ -94,9 +94,13 @@ def test_offset_and_initial_state_are_nuisances(dc_drive):
     assert result.offsets[0] == pytest.approx(
         0.01 * np.abs(y - 0.01 * np.abs(y).max()).max(), rel=0.05
     )
-    plain = quiet_fit(dc_drive, t, u, y, hold="zoh", offset=False, initial_state=False)
+    plain = quiet_fit(dc_drive, t, u, y, hold="zoh", offset=False, initial_state=False,
+                      noise="white")  # fmt: skip
     assert abs(plain.k - 10.0) > 0.5
     assert any("residuals are far from white" in text for text in plain.warnings)
+    # a noise model reads the misfit as coloured noise: an interval that says so
+    coloured = quiet_fit(dc_drive, t, u, y, hold="zoh", offset=False, initial_state=False)
+    assert coloured.noise.orders != (0, 0) and abs(coloured.k - 10.0) < 2 * coloured.k_se
     assert result.simulate(t, u) == pytest.approx(
         dc_drive.simulate(t, u, result.k, hold="zoh") + result.offsets[0]
     )
@@ -190,7 +194,7 @@ def test_bad_records_are_clear_errors(dc_drive):
     ]:
         with pytest.raises(ValueError, match=message):
             dc_drive.fit(*arguments)
-    with pytest.raises(ValueError, match="method must be one of 'iv', 'ls'"):
+    with pytest.raises(ValueError, match="method must be one of 'pem', 'iv', 'ls'"):
         dc_drive.fit(t, u, y, method="oe")
     with pytest.raises(ValueError, match="record must be a whole number from 0 to 0"):
         quiet_fit(dc_drive, t, u, y).simulate(t, u, record=1)
@@ -340,7 +344,7 @@ def test_the_module_command_line_fits_several_files(dc_drive, tmp_path, capsys):
 
     result = json.loads(out)
     assert result["ok"] and result["k"] == pytest.approx(10.0, abs=4 * result["k_se"])
-    assert len(result["offsets"]) == 2 and result["method"] == "iv" and result["warnings"] == []
+    assert len(result["offsets"]) == 2 and result["method"] == "pem" and result["warnings"] == []
     status = dc_drive.main(["fit", paths[0], "--columns", "time,volts,speed", "--filter", "(1+s)^5",
                             "--method", "ls"])  # fmt: skip
     out, err = capsys.readouterr()

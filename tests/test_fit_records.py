@@ -32,6 +32,12 @@ class Split:
     def residual_sum(self, *args):
         return sum(group.residual_sum(*args) for group in self.groups)
 
+    def prediction(self, *args):
+        return [part for group in self.groups for part in group.prediction(*args)]
+
+    def noise_sums(self, *args):
+        return sum(group.noise_sums(*args) for group in self.groups)
+
 
 def records(module, count: int):
     out = []
@@ -44,7 +50,7 @@ def records(module, count: int):
     return out
 
 
-@pytest.mark.parametrize("method", ["iv", "ls"])
+@pytest.mark.parametrize("method", ["pem", "iv", "ls"])
 def test_records_in_groups_fit_as_one_list(dc_drive, method):
     data = records(dc_drive, 5)
     with warnings.catch_warnings():

@@ -6,42 +6,14 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from scipy import linalg, signal
-
-
-def _step(A, B, h, x, u0, u1, hold):
-    """x(t + h) of x' = A x + B u, u held at u0 or linear from u0 to u1: Van Loan's block
-    exponential, written here from its definition."""
-    order = A.shape[0]
-    F = np.zeros((order + 2, order + 2))
-    F[:order, :order], F[:order, order] = A, B[:, 0]
-    F[order, order + 1] = 1.0  # u(s) = a + b s
-    E = linalg.expm(F * h)
-    slope = 0.0 if hold == "zoh" else (u1 - u0) / h
-    return E[:order, :order] @ x + E[:order, order] * u0 + E[:order, order + 1] * slope
-
-
-def reference(module, t, u, k, x0, hold: str, **known) -> np.ndarray:
-    """The output of scipy's tf2ss(G(s, k)) from x0, step by step."""
-    A, B, C, D = signal.tf2ss(*module.transfer_function(k, **known))
-    x, y = np.array(x0, dtype=float), np.empty(t.size)
-    for i in range(t.size):
-        y[i] = C[0] @ x + D[0, 0] * u[i]
-        if i + 1 < t.size:
-            x = _step(A, B, t[i + 1] - t[i], x, u[i], u[i + 1], hold)
-    return y
-
-
-def _prbs(t, period, seed):
-    rng = np.random.default_rng(seed)
-    count = int(np.floor((t[-1] - t[0]) / period)) + 1
-    return rng.choice([-1.0, 1.0], count)[np.floor((t - t[0]) / period + 1e-9).astype(int)]
+from sampled import prbs, reference
+from scipy import signal
 
 
 def test_dlsim_agrees_with_the_reference(dc_drive):
     """The step-by-step reference is scipy's dlsim for a held input (a check of the check)."""
     t = 0.01 * np.arange(201)
-    u = _prbs(t, 0.2, 0)
+    u = prbs(t, 0.2, 0)
     x0 = np.array([0.1, -0.2, 0.3, 0.05])
     system = signal.cont2discrete(signal.tf2ss(*dc_drive.transfer_function(10.0)), 0.01)
     expected = signal.dlsim(system, u, t, x0=x0)[1][:, 0]
@@ -51,7 +23,7 @@ def test_dlsim_agrees_with_the_reference(dc_drive):
 @pytest.mark.parametrize("hold", ["zoh", "linear"])
 def test_with_nuisances_recovers_initial_state_and_offset(dc_drive, hold):
     t = 0.01 * np.arange(301)
-    u = _prbs(t, 0.2, 1) if hold == "zoh" else np.sin(3 * t) + 0.5 * np.cos(7 * t)
+    u = prbs(t, 0.2, 1) if hold == "zoh" else np.sin(3 * t) + 0.5 * np.cos(7 * t)
     x0 = np.random.default_rng(2).standard_normal(4)
     y = reference(dc_drive, t, u, 10.0, x0, hold) + 0.7
     fitted, offset, state = dc_drive._with_nuisances(
@@ -65,7 +37,7 @@ def test_with_nuisances_recovers_initial_state_and_offset(dc_drive, hold):
 def test_with_nuisances_irregular_sampling_several_unknowns(dc_motor):
     rng = np.random.default_rng(3)
     t = np.r_[0.0, np.sort(rng.uniform(0.0, 6.0, 400))]
-    u = _prbs(t, 0.5, 4)
+    u = prbs(t, 0.5, 4)
     k = {"ra": 1.3, "jl": 7.0}
     x0 = np.array([0.4, -0.9])
     y = reference(dc_motor, t, u, k, x0, "zoh") - 0.25
@@ -80,7 +52,7 @@ def test_with_nuisances_irregular_sampling_several_unknowns(dc_motor):
 def test_with_nuisances_flags(absorber):
     """Only what the flags allow is fitted: without them the output is `simulate`'s."""
     t = 0.01 * np.arange(401)
-    u = _prbs(t, 0.5, 5)
+    u = prbs(t, 0.5, 5)
     known = {"tau": 2.0, "l": 0.5}
     clean = reference(absorber, t, u, 0.72, np.zeros(3), "zoh", **known)
     bare = absorber._with_nuisances(
@@ -97,7 +69,7 @@ def test_with_nuisances_flags(absorber):
 def test_sensitivities_match_finite_differences(dc_motor):
     """dy/dk from the augmented system against central differences of the exact output."""
     t = 0.01 * np.arange(1001)
-    u = _prbs(t, 0.3, 6)
+    u = prbs(t, 0.3, 6)
     k = np.array([1.0, 10.0])
     real = dc_motor._realise(dc_motor.theta(), k)
     _, slopes = dc_motor._sensitivities(real, t, u, "zoh", np.zeros(real.order))
@@ -109,3 +81,22 @@ def test_sensitivities_match_finite_differences(dc_motor):
             2 * step[j]
         )
         assert np.max(np.abs(difference - slopes[:, j])) < 1e-6 * np.max(np.abs(slopes[:, j]))
+
+
+def test_fine_sampling_keeps_its_digits(dc_drive):
+    """Poles near z = 1 (dt 1e-4, slowest time constant 10 s), a complex pair, and a pole
+    of multiplicity five (the filter (1 + s)^5): held step responses against their closed
+    forms to 1e-11."""
+    t = 1e-4 * np.arange(20001)
+    u = np.ones_like(t)
+    num, den = dc_drive.transfer_function(10.0)
+    poles = np.roots(den)
+    residues = np.polyval(num, poles) / (np.polyval(np.polyder(den), poles) * poles)
+    exact = num[-1] / den[-1] + (residues * np.exp(np.outer(t, poles))).sum(1).real
+    assert np.max(np.abs(dc_drive.simulate(t, u, 10.0, hold="zoh") - exact)) < 1e-11
+    states = dc_drive.filter_states(t[:10001], u[:10001], C="(1+s)^5", hold="zoh")
+    s = t[:10001]
+    first = 1 - np.exp(-s) * (1 + s + s**2 / 2 + s**3 / 6 + s**4 / 24)
+    last = np.exp(-s) * (s - 3 * s**2 / 2 + s**3 / 2 - s**4 / 24)
+    assert np.max(np.abs(states[:, 0] - first)) < 1e-11
+    assert np.max(np.abs(states[:, 4] - last)) < 1e-11

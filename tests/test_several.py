@@ -55,19 +55,21 @@ def quiet(function, *args, **options):
         return function(*args, **options)
 
 
-@pytest.mark.parametrize("method", ["iv", "ls"])
+@pytest.mark.parametrize("method", ["pem", "iv", "ls"])
 def test_noise_free_records_give_every_unknown_to_1e6(dc_motor, rlc3, method):
-    """The targets of issue 11: ra, jl and r, l, c from noise-free data, 1e-6 relative. The
-    only error left is the linear interpolation of the output between samples (it falls as
-    dt^2: these records are sampled finely enough)."""
+    """The targets of issue 11: ra, jl and r, l, c from noise-free data, 1e-6 relative. For
+    "iv" and "ls" the only error left is the linear interpolation of the output between
+    samples (it falls as dt^2: these records are sampled finely enough), and the exact
+    output error sees it (ok False: the model file's values fit better); "pem" is exact."""
     for module, tf, k, dt, t_end, hold in (
         (dc_motor, motor_tf, MOTOR, 0.0005, 10.0, 0.25),
         (rlc3, rlc_tf, RLC, 0.0002, 2.0, 0.05),
     ):
         t, u, y = record(tf, k, dt, t_end, hold)
         result = quiet(module.fit, t, u, y, hold="zoh", method=method)
-        assert result.ok and result.k.shape == k.shape
-        np.testing.assert_allclose(result.k, k, rtol=1e-6)
+        assert result.k.shape == k.shape
+        assert result.ok if method == "pem" else "fits the data better" in result.warnings[0]
+        np.testing.assert_allclose(result.k, k, rtol=1e-6 if method != "pem" else 1e-9)
         assert np.all(result.k_se < 1e-5 * k) and result.covariance.shape == (k.size, k.size)
         assert result.ci.shape == (k.size, 2) and np.all(result.ci[:, 0] < result.k)
 
@@ -153,7 +155,8 @@ def test_fit_takes_vectors_and_dicts_and_reports_bounds_and_minima(dc_motor):
                     bounds={"ra": (0.1, 10.0), "jl": (1.0, 100.0)})  # fmt: skip
     np.testing.assert_allclose(by_name.k, result.k, rtol=1e-8)
     np.testing.assert_array_equal(result.bounds, [[0.1, 10.0], [1.0, 100.0]])  # the default box
-    assert result.minima.shape[1] == 2 and np.allclose(result.minima[0], result.k)
+    # the least-squares cost's global minimum: the exact descent's start, within a percent
+    assert result.minima.shape[1] == 2 and np.allclose(result.minima[0], result.k, rtol=0.01)
     assert np.all(np.abs(result.k - MOTOR) < 4 * result.k_se)
     np.testing.assert_allclose(result.k_se, np.sqrt(np.diag(result.covariance)))
     alone = quiet(dc_motor.fit, t, u, y, hold="zoh", uncertainty=False)  # the estimate alone
@@ -270,7 +273,8 @@ def test_a_locally_identifiable_model_has_both_minima_and_a_warning():
     u = module.input_signal("prbs", t, period=0.5)
     y = module.simulate(t, u, [1.0, 3.0], hold="zoh")
     with pytest.warns(
-        module.EstimationWarning, match=r"another local minimum, r1 = 1\.[45]\d*, r2 = [12]\."
+        module.EstimationWarning,
+        match=r"another local minimum of the prediction error, r1 = 1\.[45]\d*, r2 = [12]\b",
     ):
         result = module.fit(t, u, y, hold="zoh")
     found = result.minima[np.argsort(result.minima[:, 0])]
@@ -289,11 +293,12 @@ def test_a_valley_of_minima_or_a_flat_criterion_is_a_message_not_a_linalg_error(
     clean = rc.simulate(t, u, [1000.0, 1e-6], hold="zoh")
     for seed in range(3):
         y = clean + 0.01 * np.random.default_rng(seed).standard_normal(t.size)
-        result = quiet(rc.fit, t, u, y, hold="zoh")
-        assert not result.ok and np.isnan(result.k).all() and result.minima.shape == (0, 2)
-        assert "no local minimum within the bounds (it is flat along some direction" in (
-            result.message
-        )
+        for method in ("pem", "iv"):  # (pem: no start, the polynomial's verdict)
+            result = quiet(rc.fit, t, u, y, hold="zoh", method=method)
+            assert not result.ok and np.isnan(result.k).all() and result.minima.shape == (0, 2)
+            assert "no local minimum within the bounds (it is flat along some direction" in (
+                result.message
+            )
     t = np.linspace(0.0, 20.0, 2001)
     zero, one = np.zeros_like(t), np.ones_like(t)
     result = quiet(dc_motor.fit, t, zero, zero)

@@ -402,6 +402,12 @@ class Pooled:
     def residual_sum(self, *args) -> float:
         return sum(self._ask("residual_sum", args))
 
+    def prediction(self, *args) -> list:
+        return [part for parts in self._ask("prediction", args) for part in parts]
+
+    def noise_sums(self, *args):
+        return sum(self._ask("noise_sums", args))
+
 
 def _pooled(found: Estimator, records, executor, jobs, columns, chunk_size, progress,
             options) -> Batch:  # fmt: skip

@@ -186,10 +186,11 @@ def _cells(module, outcome) -> tuple[str, ...]:
 
 def _table(module, args, batch) -> str:
     from mtt.present import tables
+    from mtt.present.fits import METHOD_NAMES
 
     where = (f"on {args.scheduler}" if args.scheduler else
              f"{args.jobs} processes" if (args.jobs or 1) > 1 else "in this process")  # fmt: skip
-    method = "refined instrumental variables" if args.method == "iv" else "least squares"
+    method = METHOD_NAMES[args.method]
     if len(module.UNKNOWNS) == 1:
         estimates = (module.UNKNOWN, "k_se")
     else:

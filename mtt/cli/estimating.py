@@ -163,8 +163,8 @@ def _least_squares(module: ModuleType, data: Record, result, args, fits: dict) -
         fits[key] = module.fit(data.t, data.u, data.y, method="ls", C=result.filter,
                                beta=args.beta, hold=hold_of(args), offset=False,
                                initial_state=False)  # fmt: skip
-    final = fits[key]
-    if not (final.ok and np.all(np.isfinite(final.k_se))):
+    final = fits[key]  # (its ok also weighs the exact output error, not J's own figures)
+    if not (np.all(np.isfinite(final.k)) and np.all(np.isfinite(final.k_se))):
         return None, None
     return final.k_se, final.k
 

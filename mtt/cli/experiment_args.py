@@ -252,10 +252,12 @@ def register(commands) -> None:
         "fit",
         help="fit the unknown(s) to whole records, with their uncertainty",
         description="Fit the unknown(s) to whole records (measured, several --data combined, or "
-        "simulated) with the generated module's `fit`: refined instrumental variables by "
-        "default (unbiased under output noise), offsets and initial state estimated; print "
-        "the estimate, its standard error and 95 % interval, the fit and every warning. "
-        "Exit status 1 when there is no estimate (the data do not determine the unknown).",
+        "simulated) with the generated module's `fit`: by default the minimiser of the exact "
+        "sampled-data prediction error (from the global minimiser of the paper's "
+        "least-squares cost), with a noise model chosen by the BIC, offsets and initial state "
+        "estimated; print the estimate, its standard error and 95 % interval, the fit, the "
+        "noise model and every warning. Exit status 1 when there is no estimate or a "
+        "diagnostic contradicts it (the reason is printed).",
     )
     fit.add_argument("file", metavar="FILE")
     add_parameter_options(fit)
@@ -263,9 +265,17 @@ def register(commands) -> None:
     group = fit.add_argument_group("estimator")
     group.add_argument(
         "--method",
-        choices=("iv", "ls"),
-        default="iv",
-        help="iv: refined instrumental variables (default); ls: the paper's least squares",
+        choices=("pem", "iv", "ls"),
+        default="pem",
+        help="pem: the exact prediction error (default); iv: refined instrumental variables; "
+        "ls: the paper's least squares (both exact for a linear interpolation of the output)",
+    )
+    group.add_argument(
+        "--noise",
+        choices=("auto", "white", "ar", "arma"),
+        default="auto",
+        help="the output noise model of --method pem (default auto: white, AR or ARMA, orders "
+        "by the BIC)",
     )
     _filter_options(group, several=False, default="auto")
     group.add_argument(
@@ -294,7 +304,12 @@ def register(commands) -> None:
         default=True,
         help="allow the system not to be at rest at the first sample (default on)",
     )
-    group.add_argument("--beta", type=float, default=0.0, help="forgetting factor (default 0)")
+    group.add_argument(
+        "--beta",
+        type=float,
+        default=0.0,
+        help="iv and ls only: weigh each sample by e^(-beta (t_end - t)) (default 0)",
+    )
     outputs = fit.add_argument_group("outputs")
     outputs.add_argument(
         "--plot",

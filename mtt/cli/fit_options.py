@@ -11,7 +11,7 @@ from mtt.cli.running import UsageError
 def options(module, args) -> dict:
     """The module's `fit` options from the command line (k0 and bounds by unknown)."""
     return dict(
-        method=args.method, C=_filter(args),
+        method=args.method, noise=args.noise, C=_filter(args),
         k0=None if args.k0 is None else unknowns.point(module, args.k0, "--k0"),
         bounds=unknowns.bounds(module, args.bounds), offset=args.offset,
         initial_state=args.initial_state, hold=hold_of(args), beta=args.beta,

@@ -41,7 +41,8 @@ def cmd_fit(args) -> int:
         raise UsageError(_files_named(str(error), records)) from None
     warn("fit", result.warnings)
     compared = validate(result, held_out)
-    if args.plot and result.ok:
+    shown_fit = len(result.fitted) == len(records) and all(len(f) for f in result.fitted)
+    if args.plot and shown_fit:  # (an estimate that is not ok is drawn, and said to be)
         from mtt.present import plots  # matplotlib takes a quarter second to import
 
         shown = [
@@ -55,11 +56,14 @@ def cmd_fit(args) -> int:
         plots.fit(
             args.plot, shown, output_label=signal_label(module, "output"), dpi=args.dpi,
             title=f"{module.MODEL}: {fits.estimates(module, result)}, "
-            f"fit {result.fit_percent:.4g} %", validation=checked,
+            f"fit {result.fit_percent:.4g} %"
+            + ("" if result.noise is None else f"; noise {fits.noise_text(result.noise)}")
+            + ("" if result.ok else " (not ok: see the warnings)"),
+            validation=checked,
         )  # fmt: skip
     elif args.plot:
         warn("fit", [f"no plot: {result.message}"])
-    if args.csv and result.ok:
+    if args.csv and shown_fit:
         rows = (
             (number, t, u, y, fitted, y - fitted)
             for number, (data, fitted) in enumerate(zip(records, result.fitted, strict=True), 1)

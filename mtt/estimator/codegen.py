@@ -40,7 +40,7 @@ from mtt.version import __version__
 RESERVED = frozenset(
     {"t", "u", "y", "k", "k0", "beta", "S0", "C", "hold", "method", "rtol", "atol"}
     | {"max_step", "progress", "engine", "bounds", "self", "known", "offset", "initial_state"}
-    | {"records", "keep", "fraction", "uncertainty"}  # fit_records, prior_weight, fit
+    | {"records", "keep", "fraction", "uncertainty", "noise"}  # fit_records, prior_weight, fit
 )
 # Run by the interpreter at start-up wherever they are on its path (as are a package's
 # __init__ and __main__: every __dunder__ name is refused too).

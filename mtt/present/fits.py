@@ -1,5 +1,5 @@
 """A fit as people read it: each unknown's estimate with its standard error and 95 %
-interval, the fit, the method and the local minima of the criterion."""
+interval, the fit, the method, the local minima of the criterion and the noise model."""
 
 from __future__ import annotations
 
@@ -33,25 +33,54 @@ def uncertainty_lines(module, k, k_se, ci, indent: str = "  ") -> list[str]:
     ]
 
 
+METHOD_NAMES = {
+    "pem": "exact prediction error",
+    "iv": "refined instrumental variables",
+    "ls": "least squares",
+}
+
+
+def noise_text(noise) -> str:
+    """`ARMA(2,1): D = 1 - 1.5 q^-1 + 0.7 q^-2, C = 1 + 0.5 q^-1, innovations std 0.1`."""
+    if noise.orders == (0, 0):
+        return f"white, std {noise.std:.3g}"
+
+    def polynomial(letter: str, c) -> str:
+        terms = "".join(
+            f" {'-' if value < 0 else '+'} {abs(value):.4g} q^-{power}"
+            for power, value in enumerate(c[1:], 1)
+        )
+        return f"{letter} = 1{terms}"
+
+    parts = [polynomial("D", noise.ar)] + ([polynomial("C", noise.ma)] if len(noise.ma) > 1 else [])
+    return f"{noise.kind}: {', '.join(parts)}, innovations std {noise.std:.3g}"
+
+
 def fit_text(module, records, result) -> str:
     sources = "; ".join(data.note for data in records)
     lines = [f"{module.MODEL}: {sources}"]
-    if not result.ok:
+    if not np.all(np.isfinite(result.k)):
         lines.append(f"  no estimate: {result.message}")
         return "\n".join(lines)
-    method = "refined instrumental variables" if result.method == "iv" else "least squares"
-    steps = f", {result.iterations} iterations" if result.method == "iv" else ""
+    if not result.ok:
+        lines.append(f"  not ok: {result.warnings[0] if result.warnings else result.message}")
+    steps = {"pem": "Gauss-Newton steps", "iv": "iterations"}.get(result.method)
+    steps = f", {result.iterations} {steps}" if steps else ""
     lines += uncertainty_lines(module, result.k, result.k_se, result.ci)
     if len(module.UNKNOWNS) == 1:
         minima = ", ".join(f"{value:.6g}" for value in result.minima)
     else:
         minima = "; ".join(f"({values.text(module, point, '.6g')})" for point in result.minima)
     minima = minima or "none within the bounds"
+    criterion = "least-squares cost (the starts)" if result.method == "pem" else "criterion"
     lines += [
         f"  fit {result.fit_percent:.4g} %, residual RMS {result.residual_rms:.3g}, "
         f"noise std {result.noise_std:.3g}",
-        f"  method: {method}{steps}; local minima of the criterion: {minima}",
+        f"  method: {METHOD_NAMES[result.method]}{steps}; "
+        f"local minima of the {criterion}: {minima}",
     ]
+    if result.noise is not None:
+        lines.append(f"  noise model: {noise_text(result.noise)}")
     if any(result.offsets):
         lines.append("  output offset at rest: " + ", ".join(f"{v:.6g}" for v in result.offsets))
     return "\n".join(lines)

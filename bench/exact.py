@@ -1,0 +1,257 @@
+"""Issue 18's targets for the exact fit (`fit`'s default, method="pem"): exactness on short
+noise-free records, calibration under white and coloured noise, and speed against the
+output-error peer, all on records made here, independently of the generated modules.
+
+The records: the transfer functions of method.md written out (bench/montecarlo.py), a
+PRBS held between switches (or a piecewise-linear input) simulated by scipy.signal.lsim
+(interp=False for a held input, True for a piecewise-linear one: exact for each), from a
+random initial state of scipy's tf2ss realisation where the row says so, plus an output
+offset; output noise white Gaussian, AR(1) with its pole at 0.9, or ARMA(2,1) with
+D(q) = 1 - 1.5 q^-1 + 0.7 q^-2 (poles 0.75 +- 0.37i) and C(q) = 1 + 0.5 q^-1, at a
+signal-to-noise ratio (the clean output's variance over the noise's). `fit` is told the
+hold and nothing else (noise "auto", offset and initial state estimated). "k_se / std" is
+the mean standard error over the spread of the estimates; "covers" the share of 95 %
+intervals that hold the truth. Times: this process's CPU time, BLAS on one thread; the
+speed rows interleave `fit` and the peer (bench/output_error_peer.py, started at the
+model file's values, the reference of issue 18) and give the ratio of their medians.
+
+    .venv/bin/python bench/exact.py --seeds 60           # every table (about 15 minutes)
+    .venv/bin/python bench/exact.py --seeds 8 --only short,coloured
+"""
+
+from __future__ import annotations
+
+import os
+
+os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")  # before numpy loads OpenBLAS
+
+import argparse  # noqa: E402
+import math  # noqa: E402
+import subprocess  # noqa: E402
+import sys  # noqa: E402
+import time  # noqa: E402
+import warnings  # noqa: E402
+
+import numpy as np  # noqa: E402
+import output_error_peer as peer  # noqa: E402
+from _generated import generated  # noqa: E402
+from montecarlo import absorber_tf, dc_drive_tf, dc_motor_tf, prbs, table  # noqa: E402
+from scipy import signal  # noqa: E402
+
+NOISES = {  # (D, C) of v = C(q)/D(q) e
+    "white": ([1.0], [1.0]),
+    "AR(1), pole 0.9": ([1.0, -0.9], [1.0]),
+    "ARMA(2,1)": ([1.0, -1.5, 0.7], [1.0, 0.5]),
+}
+
+
+def simulate(tf, k, t, u, hold: str, x0=None) -> np.ndarray:
+    system = signal.StateSpace(*signal.tf2ss(*tf(k)))
+    return signal.lsim(system, u, t, X0=x0, interp=hold == "linear")[1]
+
+
+def noisy(clean: np.ndarray, snr_db: float, noise: str, seed: int) -> np.ndarray:
+    D, C = NOISES[noise]
+    v = signal.lfilter(C, D, np.random.default_rng(10_000 + seed).standard_normal(clean.size))
+    return clean + v * math.sqrt(np.var(clean) / 10 ** (snr_db / 10) / np.var(v))
+
+
+def summary(k: np.ndarray, se: np.ndarray, truth: float) -> list[str]:
+    std = k.std(ddof=1)
+    covers = np.mean(np.abs(k - truth) <= 1.959963984540054 * se)
+    return [f"{100 * (k.mean() / truth - 1):+.3f} %", f"{100 * std / truth:.3f} %",
+            f"{se.mean() / std:.2f}", f"{100 * covers:.0f} %"]  # fmt: skip
+
+
+def short_rows(seeds: int) -> list[list[str]]:
+    """Noise-free DC drive, 3 s, PRBS held 0.2 s (or piecewise linear, hold linear), a random
+    initial state and offset per seed: the largest error of k over the seeds."""
+    module = generated("dc_drive")
+    rows = [["record (noise-free, 3 s)", "hold", "dt", "method", "largest |k/10 - 1|",
+             "median", "ok", "time per fit"]]  # fmt: skip
+    for hold in ("zoh", "linear"):
+        for dt in (0.01, 0.02):
+            t = dt * np.arange(round(3.0 / dt) + 1)
+            errors, oks, spent = {"pem": [], "iv": []}, {"pem": 0, "iv": 0}, {"pem": [], "iv": []}
+            for seed in range(seeds):
+                rng = np.random.default_rng(seed)
+                if hold == "zoh":
+                    u = prbs(t, 0.2, seed)
+                else:  # piecewise linear between knots 0.2 s apart
+                    knots = t[:: round(0.2 / dt)]
+                    u = np.interp(t, knots, rng.standard_normal(knots.size))
+                y = simulate(dc_drive_tf, 10.0, t, u, hold, rng.standard_normal(4))
+                y = y + rng.uniform(-1, 1)
+                for method in errors:
+                    start = time.process_time()
+                    result = module.fit(t, u, y, hold=hold, method=method)
+                    spent[method].append(time.process_time() - start)
+                    errors[method].append(abs(result.k / 10.0 - 1))
+                    oks[method] += result.ok
+            label = "PRBS held 0.2 s" if hold == "zoh" else "piecewise linear, knots 0.2 s"
+            for method in errors:
+                rows.append([label, hold, f"{dt:g}", method, f"{max(errors[method]):.1e}",
+                             f"{np.median(errors[method]):.1e}", f"{oks[method]}/{seeds}",
+                             f"{1e3 * np.median(spent[method]):.0f} ms"])  # fmt: skip
+    return rows
+
+
+def calibration(module, tf, truth, t, hold_period, snr, noise, seeds, methods, known, x0=False):
+    """{method: (k, se, oks, noise kinds, times)} over the seeds."""
+    found = {m: ([], [], 0, {}, []) for m in methods}
+    for seed in range(seeds):
+        rng = np.random.default_rng(seed)
+        u = prbs(t, hold_period, seed)
+        order = len(tf(truth)[1]) - 1
+        clean = simulate(tf, truth, t, u, "zoh", rng.standard_normal(order) if x0 else None)
+        y = noisy(clean + (rng.uniform(-1, 1) if x0 else 0.0), snr, noise, seed)
+        for method, options in methods.items():
+            start = time.process_time()
+            result = module.fit(t, u, y, hold="zoh", **options, **known)
+            ks, ses, oks, kinds, spent = found[method]
+            spent.append(time.process_time() - start)
+            ks.append(result.k)
+            ses.append(result.k_se)
+            kind = "-" if result.noise is None else result.noise.kind
+            kinds[kind] = kinds.get(kind, 0) + 1
+            found[method] = (ks, ses, oks + result.ok, kinds, spent)
+    return found
+
+
+def calibration_rows(title, cases, seeds) -> list[list[str]]:
+    rows = [[title, "noise", "SNR", "method", "bias", "std", "k_se / std", "95 % CI covers",
+             "ok", "noise models chosen", "time per fit"]]  # fmt: skip
+    for label, name, tf, truth, t, period, snr, noise, methods, known, x0 in cases:
+        module = generated(name)
+        found = calibration(module, tf, truth, t, period, snr, noise, seeds, methods, known, x0)
+        for method, (ks, ses, oks, kinds, spent) in found.items():
+            chosen = ", ".join(f"{kind} {count}" for kind, count in sorted(kinds.items()))
+            rows.append([label, noise, f"{snr:g} dB", method,
+                         *summary(np.array(ks), np.array(ses), truth), f"{oks}/{seeds}", chosen,
+                         f"{1e3 * np.median(spent):.0f} ms"])  # fmt: skip
+        print(f"  {label}, {noise} done", file=sys.stderr)
+    return rows
+
+
+def dc10_rows(seeds: int) -> list[list[str]]:
+    """Issue 18's record: from rest, no offset (both estimated), as `mtt fit --signal prbs
+    --period 0.2 --t-end 10 --dt 0.01 --noise-snr 20` makes it."""
+    t = 0.01 * np.arange(1001)
+    methods = {"fit (pem, defaults)": {}, "fit, method='iv'": {"method": "iv"}}
+    case = ("DC drive, 10 s, PRBS 0.2 s, dt 0.01", "dc_drive", dc_drive_tf, 10.0, t, 0.2, 20.0,
+            "white", methods, {}, False)  # fmt: skip
+    return calibration_rows("record", [case], seeds)
+
+
+def coloured_rows(seeds: int) -> list[list[str]]:
+    dc = 0.02 * np.arange(20001)
+    absorber = 0.01 * np.arange(4001)
+    methods = {"fit (pem, noise auto)": {}, "fit, noise='white'": {"noise": "white"},
+               "fit, method='iv'": {"method": "iv"}}  # fmt: skip
+    cases = []
+    for noise in ("AR(1), pole 0.9", "ARMA(2,1)"):
+        cases.append(("DC drive, 400 s, PRBS 1 s, dt 0.02", "dc_drive", dc_drive_tf, 10.0, dc,
+                      1.0, 10.0, noise, methods, {}, False))  # fmt: skip
+        known = {"tau": 2.0, "l": 0.5}
+        cases.append(("absorber, 40 s, PRBS 2 s, dt 0.01", "absorber", absorber_tf, 0.72,
+                      absorber, 2.0, 10.0, noise, methods, known, False))  # fmt: skip
+    return calibration_rows("record", cases, seeds)
+
+
+def speed_rows(repeats: int) -> list[list[str]]:
+    """The default fit against the peer on 2e4-sample records at 20 dB (white noise)."""
+    rows = [["record (2e4 samples, 20 dB)", "fit (defaults)", "output-error peer", "peer / fit",
+             "k: fit", "k: peer"]]  # fmt: skip
+    absorber = {"tau": 2.0, "l": 0.5}
+    cases = [("DC drive, PRBS 1 s, dt 0.02", "dc_drive", dc_drive_tf, 10.0, 0.02, 1.0, {}),
+             ("absorber, PRBS 2 s, dt 0.01", "absorber", absorber_tf, 0.72, 0.01, 2.0, absorber),
+             ("dc_motor, PRBS 0.5 s, dt 0.01", "dc_motor", dc_motor_tf, (1.0, 10.0), 0.01, 0.5,
+              {})]  # fmt: skip
+    for label, name, tf, truth, dt, period, known in cases:
+        module = generated(name)
+        t = dt * np.arange(20001)
+        u = prbs(t, period, 1)
+        y = noisy(simulate(tf, truth, t, u, "zoh"), 20.0, "white", 1)
+        peer.check(module, t[:2001], u[:2001], truth, hold="zoh", **known)
+        k0 = module.TRUE_VALUE
+        box = None if np.ndim(k0) == 0 else [(v / module.DEFAULT_RANGE, v * module.DEFAULT_RANGE)
+                                             for v in k0]  # fmt: skip
+        calls = {
+            "fit": (module.fit, (t, u, y), dict(hold="zoh", **known)),
+            "peer": (peer.fit, (module, t, u, y), dict(k0=k0, bounds=box, hold="zoh", **known)),
+        }
+        spent, out = {key: [] for key in calls}, {}
+        for _ in range(repeats):
+            for key, (call, args, options) in calls.items():
+                start = time.process_time()
+                out[key] = call(*args, **options)
+                spent[key].append(time.process_time() - start)
+        fit_, peer_ = np.median(spent["fit"]), np.median(spent["peer"])
+        shown = [np.array2string(np.atleast_1d(out[key].k), precision=6) for key in calls]
+        rows.append([label, f"{1e3 * fit_:.1f} ms", f"{1e3 * peer_:.1f} ms",
+                     f"{peer_ / fit_:.2f}", *shown])  # fmt: skip
+    return rows
+
+
+THROUGHPUT = """
+import os, resource, sys, time, tracemalloc, warnings
+os.environ["OPENBLAS_NUM_THREADS"] = "1"
+sys.path[:0] = [{bench!r}]
+import numpy as np
+from _generated import generated
+from montecarlo import dc_drive_tf, prbs
+from exact import noisy, simulate
+warnings.simplefilter("ignore")
+module = generated("dc_drive")
+t = 0.01 * np.arange(10**6)
+u = prbs(t, 1.0, 1)
+y = noisy(simulate(dc_drive_tf, 10.0, t, u, "zoh"), 20.0, "white", 1)
+tracemalloc.start()
+start = time.process_time()
+result = module.fit(t, u, y, hold="zoh")
+spent = time.process_time() - start
+peak = tracemalloc.get_traced_memory()[1]
+rss = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss * 1024
+print(t.size / spent, spent, peak, rss, result.k, result.k_se, result.noise.kind)
+"""
+
+
+def throughput_rows() -> list[list[str]]:
+    """The default fit on a 1e6-sample DC-drive record in a fresh interpreter: samples per
+    CPU second, numpy's peak allocation (tracemalloc) and the process's peak resident size."""
+    bench = os.path.dirname(os.path.abspath(__file__))
+    code = THROUGHPUT.format(bench=bench)
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    rate, spent, peak, rss, k, se, kind = out.stdout.split()
+    head = ["record", "samples/s", "time", "numpy peak", "process peak", "k", "noise model"]
+    row = ["DC drive, 1e6 samples, PRBS 1 s, dt 0.01, 20 dB", f"{float(rate):.3g}",
+           f"{float(spent):.2f} s", f"{float(peak) / 2**20:.0f} MiB",
+           f"{float(rss) / 2**20:.0f} MiB", f"{float(k):.6g} +- {float(se):.2g}", kind]  # fmt: skip
+    return [head, row]
+
+
+TABLES = {
+    "short": ("Short noise-free records (DC drive, k = 10)", short_rows),
+    "dc10": ("DC drive 10 s at 20 dB", dc10_rows),
+    "coloured": ("Coloured noise at 10 dB", coloured_rows),
+    "speed": ("Speed against the output-error peer", lambda seeds: speed_rows(7)),
+    "throughput": ("Throughput and memory", lambda seeds: throughput_rows()),
+}
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--seeds", type=int, default=60, help="records per row (60)")
+    parser.add_argument("--only", default=",".join(TABLES), help=f"tables: {','.join(TABLES)}")
+    args = parser.parse_args()
+    warnings.simplefilter("ignore")
+    for name in args.only.split(","):
+        title, rows = TABLES[name]
+        print(f"\n{title} ({args.seeds} seeds a row):\n" if name not in ("speed", "throughput")
+              else f"\n{title}:\n")  # fmt: skip
+        print(table(rows(args.seeds)))
+        sys.stdout.flush()
+
+
+if __name__ == "__main__":
+    main()

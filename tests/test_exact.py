@@ -1,0 +1,131 @@
+"""The exact fit (method="pem", the default): the minimiser of the sampled-data prediction
+error, on records made by scipy alone (tests/sampled.py), with fixed seeds."""
+
+from __future__ import annotations
+
+import warnings
+
+import numpy as np
+import pytest
+from sampled import held, prbs, reference
+from scipy import signal
+
+import mtt
+
+
+def quiet(module, *args, **kwargs):
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        return module.fit(*args, **kwargs)
+
+
+@pytest.mark.parametrize("dt", [0.01, 0.02])
+def test_a_short_noise_free_record_gives_k_exactly(dc_drive, dt):
+    """Issue 18: 3 s of a PRBS held 0.2 s, from a random initial state, with an offset: the
+    offset and initial state take over 99 % of the information, and the answer is still
+    the true k (the instrumental-variable fit gave 4.5 and 0.6)."""
+    t = dt * np.arange(round(3 / dt) + 1)
+    u = prbs(t, 0.2, 1)
+    x0 = np.random.default_rng(2).standard_normal(4)
+    y = held(t, u, 10.0, dc_drive, x0) + 0.3
+    result = quiet(dc_drive, t, u, y, hold="zoh")
+    assert result.method == "pem" and result.ok
+    assert result.k == pytest.approx(10.0, rel=1e-6)
+    assert result.offsets[0] == pytest.approx(0.3, abs=1e-6)
+    np.testing.assert_allclose(result.states[0], x0, atol=1e-5)
+    assert result.absorbed > 0.99  # and said, with the fraction
+    assert any("offset and initial state take" in text for text in result.warnings)
+    iv = quiet(dc_drive, t, u, y, hold="zoh", method="iv")
+    assert not iv.ok and abs(iv.k - 10.0) > 1e-3  # the exact cost contradicts it: ok is False
+
+
+def test_a_piecewise_linear_input_with_hold_linear(dc_drive):
+    t = 0.01 * np.arange(301)
+    u = np.interp(t, t[::20], np.random.default_rng(3).standard_normal(t[::20].size))
+    x0 = np.random.default_rng(4).standard_normal(4)
+    y = reference(dc_drive, t, u, 10.0, x0, "linear") - 0.1
+    result = quiet(dc_drive, t, u, y, hold="linear")
+    assert result.ok and result.k == pytest.approx(10.0, rel=1e-6)
+
+
+def test_irregular_sampling_and_several_unknowns(dc_motor):
+    rng = np.random.default_rng(5)
+    t = np.r_[0.0, np.sort(rng.uniform(0.0, 20.0, 1500))]
+    u = prbs(t, 0.5, 6)
+    truth = np.array([1.0, 10.0])
+    y = reference(dc_motor, t, u, truth, [0.3, -0.2], "zoh") + 0.05
+    result = quiet(dc_motor, t, u, y, hold="zoh")
+    assert result.ok
+    np.testing.assert_allclose(result.k, truth, rtol=1e-6)
+
+
+def test_ar_noise_is_modelled_and_k_se_follows_it(dc_drive):
+    """AR(1) output noise (pole 0.9) at 10 dB: the noise model found is AR(1) near the true
+    pole, k within 3 standard errors, and k_se larger than the white-noise fit's (which
+    reads the coloured noise as white)."""
+    t = 0.02 * np.arange(20001)
+    u = prbs(t, 1.0, 7)
+    clean = held(t, u, 10.0, dc_drive, np.zeros(4))
+    v = signal.lfilter([1.0], [1.0, -0.9], np.random.default_rng(8).standard_normal(t.size))
+    y = clean + v * np.sqrt(np.var(clean) / 10 / np.var(v))
+    result = quiet(dc_drive, t, u, y, hold="zoh")
+    assert result.noise.orders == (1, 0)
+    assert result.noise.ar[1] == pytest.approx(-0.9, abs=0.02)
+    assert abs(result.k - 10.0) < 3 * result.k_se
+    white = quiet(dc_drive, t, u, y, hold="zoh", noise="white")
+    assert white.k_se < 0.5 * result.k_se
+    assert any("far from white" in text for text in white.warnings)
+    assert not any("far from white" in text for text in result.warnings)
+
+
+def test_white_noise_keeps_a_white_model(absorber):
+    t = 0.01 * np.arange(4001)
+    u = prbs(t, 2.0, 9)
+    clean = held(t, u, 0.72, absorber, np.zeros(3), tau=2.0, l=0.5)
+    y = clean + 0.1 * np.std(clean) * np.random.default_rng(10).standard_normal(t.size)
+    result = quiet(absorber, t, u, y, hold="zoh")
+    assert result.noise.kind == "white" and result.ok
+    assert abs(result.k - 0.72) < 3 * result.k_se
+    record = absorber.fit_record(result)
+    assert record["noise"]["kind"] == "white" and record["ok"] is True
+
+
+def test_arguments_that_mean_nothing_here_are_refused(dc_drive):
+    t = 0.01 * np.arange(101)
+    u = prbs(t, 0.2, 1)
+    y = held(t, u, 10.0, dc_drive, np.zeros(4))
+    with pytest.raises(ValueError, match="forgetting belongs to the recursive estimate"):
+        dc_drive.fit(t, u, y, beta=0.5)
+    with pytest.raises(ValueError, match="assumes white noise"):
+        dc_drive.fit(t, u, y, method="iv", noise="ar")
+    with pytest.raises(ValueError, match="noise must be one of"):
+        dc_drive.fit(t, u, y, noise="pink")
+
+
+def test_a_static_model_fits_exactly():
+    model = mtt.load(
+        "model divider\nparam r1 = 2\nunknown r2 = 3\nSe:v -> 1:loop\n1:loop -> R:r1\n"
+        "1:loop -> R:r2\n1:loop -> Df:i\n"
+    )
+    module = model.estimator()
+    assert module.n == 0
+    t = np.linspace(0.0, 1.0, 101)
+    u = np.sin(7 * t)
+    result = quiet(module, t, u, u / 5.0 + 0.2)  # i = v / (r1 + r2)
+    assert result.ok and result.k == pytest.approx(3.0, rel=1e-12)
+    assert result.offsets[0] == pytest.approx(0.2, abs=1e-12)
+    with pytest.raises(ValueError, match="static"):
+        module.fit(t, u, u / 5.0, method="iv")
+
+
+def test_ok_is_false_when_the_diagnostics_contradict_the_answer(dc_drive):
+    t = 0.01 * np.arange(1001)
+    u = prbs(t, 0.2, 11)
+    y = held(t, u, 10.0, dc_drive, np.zeros(4))
+    y = y + 0.01 * np.random.default_rng(12).standard_normal(t.size)
+    bounded = quiet(dc_drive, t, u, y, hold="zoh", bounds=(1.0, 5.0))
+    assert not bounded.ok and bounded.k == 5.0
+    assert "at the upper bound" in bounded.warnings[0]
+    wrong = quiet(dc_drive, t, u, -y[::-1], hold="zoh", offset=False, initial_state=False,
+                  bounds=(1.0, 100.0))  # fmt: skip
+    assert not wrong.ok and wrong.fit_percent < 0
