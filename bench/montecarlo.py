@@ -6,10 +6,10 @@ of method.md (written out below, not taken from the modules), a PRBS from
 scipy.signal.max_len_seq held between switches, scipy.signal.lsim with a zero-order hold
 (exact for it), and white Gaussian noise on the output samples at a signal-to-noise ratio
 (signal variance over noise variance). `fit` is told the input was held (hold="zoh"), as
-the experiment was made; everything else is its default (method="iv", C="auto", offset
-and initial state estimated; several unknowns: the global search within the default box,
-the model file's values within a factor of 10). The DC motor (ra, jl) and the series RLC
-circuit (r, l, c) of issue 11 have a row per unknown.
+the experiment was made; everything else is its default (method="pem", noise="auto",
+C="auto", offset and initial state estimated; several unknowns: the global search within
+the default box, the model file's values within a factor of 10). The DC motor (ra, jl)
+and the series RLC circuit (r, l, c) of issue 11 have a row per unknown.
 
 The reference is the output-error peer: G(s, k) from the module's `transfer_function`,
 discretised exactly for the zero-order hold, one lfilter recursion per pole, the offset and
@@ -117,8 +117,8 @@ def output_error(module, t, u, y) -> np.ndarray:
 
 
 def monte_carlo(module, experiment: Experiment, snr_db: float, seeds: int, reference: int):
-    rows = {"iv": [], "ls": []}
-    times = {"iv": [], "ls": [], "oe": []}
+    rows = {"pem": [], "iv": [], "ls": []}
+    times = {"pem": [], "iv": [], "ls": [], "oe": []}
     oe = []  # several unknowns: a row each
     t, u, _ = experiment.record(0, None)
     peer.check(module, t, u, experiment.k, hold="zoh")  # the reference simulates exactly
@@ -227,7 +227,7 @@ def speed_rows(repeats: int = 5) -> list[list[str]]:
     module = generated("dc_drive")
     experiment = Experiment("dc_drive", 10.0, dc_drive_tf, 2000.0, 0.02, 1.0)
     t, u, y = experiment.record(0, 10.0)
-    for method in ("iv", "ls"):
+    for method in ("pem", "iv", "ls"):
         spent = []
         for _ in range(repeats):
             start = time.process_time()

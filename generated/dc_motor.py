@@ -495,9 +495,32 @@ def _schur_coordinates(A: np.ndarray):
     blocks = _diagonal_blocks(A)
     if blocks is not None:
         return A, None, np.eye(A.shape[0]), blocks
+    cascade = _cascade_coordinates(A)
+    if cascade is not None:
+        return cascade
     balanced, (scale, _) = linalg.matrix_balance(A, permute=False, separate=True)
     F, Q = linalg.schur(balanced, output="real")
     return F, scale[:, None] * Q, Q.T / scale[None, :], _diagonal_blocks(F)
+
+
+def _cascade_coordinates(A: np.ndarray):
+    """`_schur_coordinates` of the companion matrix of (s + 1/T)^q (the state-variable
+    filters (1 + sT)^q, whose q-fold pole a Schur form would split into a ring of
+    ill-conditioned pairs): the cascade z_i = w / (1 + sT)^(q-i), upper bidiagonal, and
+    x_j = s^j w / C = sum_l binom(j, l) (-1)^(j-l) T^-j z_l (times C's own scale, which the
+    input map carries); None for any other A."""
+    q = A.shape[0]
+    if q < 2 or not np.array_equal(A[:-1], np.eye(q - 1, q, 1)) or not A[-1, -1] < 0:
+        return None
+    T = q / -A[-1, -1]  # (s + 1/T)^q = s^q + (q/T) s^(q-1) + ...
+    powers = (1.0 / T) ** np.arange(q, 0, -1)  # (1/T)^(q-i), i = 0..q-1
+    binomials = np.array([math.comb(q, i) for i in range(q)], dtype=float)
+    if not np.allclose(-A[-1], binomials * powers, rtol=1e-12, atol=0.0):
+        return None
+    F = (np.eye(q, k=1) - np.eye(q)) / T
+    V = np.array([[math.comb(j, l) * (-1.0) ** (j - l) * T**-j if l <= j else 0.0
+                   for l in range(q)] for j in range(q)])  # fmt: skip
+    return F, V, linalg.solve_triangular(V, np.eye(q), lower=True), [(i, 1) for i in range(q)]
 
 
 def simulate(t, u, k, *, hold: str = "linear", **known: float) -> np.ndarray:

@@ -344,6 +344,11 @@ def _check_fit_options(module, options: dict) -> None:
 # pooled -------------------------------------------------------------------------------------
 
 
+def _summed(method: str, parts: bool = False):
+    """A Records method of `Pooled`: the chunks' answers summed (parts: lists, joined)."""
+    return lambda self, *args: sum(self._ask(method, args), [] if parts else 0)
+
+
 class Pooled:
     """The module's Records protocol over chunks of records that workers hold: each answer
     is the sum of the chunks' answers in chunk order (the same chunks give the same sums
@@ -393,20 +398,9 @@ class Pooled:
     def shapes(self) -> list:
         return self._shapes
 
-    def moments(self, *args):
-        return sum(self._ask("moments", args))
-
-    def validate(self, *args) -> list:
-        return [part for parts in self._ask("validate", args) for part in parts]
-
-    def residual_sum(self, *args) -> float:
-        return sum(self._ask("residual_sum", args))
-
-    def prediction(self, *args) -> list:
-        return [part for parts in self._ask("prediction", args) for part in parts]
-
-    def noise_sums(self, *args):
-        return sum(self._ask("noise_sums", args))
+    moments, residual_sum, noise_sums = (_summed(name) for name in ("moments", "residual_sum",
+                                                                     "noise_sums"))  # fmt: skip
+    validate, prediction = (_summed(name, parts=True) for name in ("validate", "prediction"))
 
 
 def _pooled(found: Estimator, records, executor, jobs, columns, chunk_size, progress,
