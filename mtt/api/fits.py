@@ -41,8 +41,10 @@ class Fit:
     def _repr_html_(self) -> str:
         """The estimates as a table (Jupyter shows it), then the fit and the warnings."""
         head = f"<p><b>{html.escape(self.module.MODEL)}</b>: {html.escape('; '.join(self.notes))}"
-        if not self.result.ok:
+        if not np.all(np.isfinite(self.result.k)):
             return f"{head}</p><p>no estimate: {html.escape(self.result.message)}</p>"
+        if not self.result.ok:
+            head += f"</p><p>not ok: {html.escape(self.result.message)}"
         cells = zip(self.module.UNKNOWNS, np.atleast_1d(self.result.k),
                     np.atleast_1d(self.result.k_se), np.reshape(self.result.ci, (-1, 2)),
                     strict=True)  # fmt: skip
@@ -56,5 +58,12 @@ class Fit:
             f"{head}</p><table><tr><th>unknown</th><th>estimate</th><th>standard error</th>"
             f"<th>95 % interval</th></tr>{rows}</table>"
             f"<p>fit {self.result.fit_percent:.4g} %, residual RMS "
-            f"{self.result.residual_rms:.3g}</p>" + (f"<ul>{warnings}</ul>" if warnings else "")
+            f"{self.result.residual_rms:.3g}"
+            + (
+                ""
+                if self.result.noise is None
+                else f"; noise model {html.escape(fits.noise_text(self.result.noise))}"
+            )
+            + "</p>"
+            + (f"<ul>{warnings}</ul>" if warnings else "")
         )

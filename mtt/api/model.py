@@ -343,13 +343,14 @@ class Model:
         return _delegate(self._estimator.estimate, t, u, y, **options, **known)
 
     def fit(
-        self, t, u, y, *, method: str = "iv", C="auto", k0=None, bounds=None,
-        offset: bool = True, initial_state: bool = True, hold: str = "linear",
+        self, t, u, y, *, method: str = "pem", noise: str = "auto", C="auto", k0=None,
+        bounds=None, offset: bool = True, initial_state: bool = True, hold: str = "linear",
         beta: float = 0.0, uncertainty: bool = True, **known: float,
     ) -> Fit:  # fmt: skip
         """The generated module's batch `fit` -> Fit: k over whole records (lists of arrays
-        for several), unbiased under output noise, with k_se, ci, fit_percent and warnings;
-        it prints as `mtt fit` does (`summary()`) and shows as a table in Jupyter.
+        for several), the minimiser of the exact prediction error with a noise model, with
+        k_se, ci, fit_percent, noise, warnings and ok; it prints as `mtt fit` does
+        (`summary()`) and shows as a table in Jupyter.
 
         >>> import mtt, numpy as np
         >>> rlc = mtt.load(mtt.example("rlc"))
@@ -361,7 +362,7 @@ class Model:
         >>> print(found.summary().splitlines()[0])
         rlc: 1001 samples
         """
-        options = dict(method=method, C=C, k0=k0, bounds=bounds, offset=offset,
+        options = dict(method=method, noise=noise, C=C, k0=k0, bounds=bounds, offset=offset,
                        initial_state=initial_state, hold=hold, beta=beta,
                        uncertainty=uncertainty)  # fmt: skip
         result = _delegate(self._estimator.fit, t, u, y, **options, **known)
