@@ -16,6 +16,7 @@ import mtt
 from mtt.cli.main import main
 from mtt.derivation.budget import Budget, Meter, TooLarge
 from mtt.derivation.elimination import bordered_ratio
+from mtt.derivation.sparse import NotDivisible, exact_quotient, product
 
 
 def symbolic_ladder(sections: int) -> str:
@@ -125,13 +126,56 @@ def test_the_meter_stops_before_the_work_exceeds_the_budget():
     meter = Meter(Budget(max_terms=19), "test stage")
     R, x, y = ring("x,y", ZZ)
     a = sum((x**i for i in range(10)), R.zero)
-    assert len(meter.multiply(a, a)) == 19  # 100 products of terms
+    assert len(product(a, a, meter)) == 19  # 100 products of terms
     with pytest.raises(TooLarge) as caught:
-        meter.multiply(a, a + y)
+        product(a, a + y, meter)
     stop = caught.value
     assert (stop.stage, stop.measure, stop.size, stop.limit) == ("test stage", "terms", 29, 19)
     meter = Meter(Budget(max_terms=1000), "test stage")
     with pytest.raises(TooLarge) as caught:
         for _ in range(10_000):
-            meter.multiply(a, a)
+            product(a, a, meter)
     assert caught.value.measure == "work" and meter.work <= caught.value.limit + 100
+
+
+def _random_poly(R, rng: random.Random, terms: int, degree: int):
+    p = R.zero
+    for _ in range(terms):
+        monomial = R(rng.randint(-9, 9))
+        for x in R.gens:
+            monomial *= x ** rng.randint(0, degree)
+        p += monomial
+    return p
+
+
+def test_sparse_products_and_exact_quotients_are_sympys():
+    """The heap division and the packed product against sympy's, on random polynomials
+    (one-term divisors, constants, exponents past a byte's range included); a divisor that
+    does not divide is refused."""
+    R, *_ = ring("s,a,b,c", ZZ)
+    rng, meter = random.Random(7), Meter(Budget(max_terms=10**6), "test")
+    for degree in (1, 3, 70):
+        for _ in range(40):
+            a = _random_poly(R, rng, rng.randint(1, 12), degree)
+            b = _random_poly(R, rng, rng.randint(1, 12), degree)
+            assert product(a, b, meter) == a * b
+            if b:
+                assert exact_quotient(a * b, b, meter) == a
+            if len(b) > 1 and (a * b + R.gens[0] ** 5).rem(b):
+                with pytest.raises(NotDivisible):
+                    exact_quotient(a * b + R.gens[0] ** 5, b, meter)
+    s, a, *_ = R.gens
+    with pytest.raises(NotDivisible):  # the quotient would outgrow s^2's degree in a
+        exact_quotient(s**2, s + a**60, meter)
+
+
+def test_a_product_stops_when_it_outgrows_the_budget_and_a_division_is_charged():
+    R, x, y = ring("x,y", ZZ)
+    a = sum((x**i for i in range(30)), R.zero)
+    b = sum((y**i for i in range(30)), R.zero)  # a * b: 900 terms
+    with pytest.raises(TooLarge) as caught:
+        product(a, b, Meter(Budget(max_terms=50), "test"))
+    assert caught.value.measure == "terms" and caught.value.size <= 4 * 50 + 30
+    meter = Meter(Budget(max_terms=10**4), "test")
+    exact_quotient(product(a, b, meter), b, meter)
+    assert meter.work == 900 + 4 * 30 * 30  # the quotient's 30 terms, each times b's 30

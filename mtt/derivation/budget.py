@@ -80,13 +80,6 @@ class Meter:
         if self.work > self.budget.max_work:
             raise TooLarge(self.stage, "work", self.work, self.budget.max_work)
 
-    def multiply(self, a, b):
-        """a * b for sparse polynomials, paid for first and held after."""
-        self.spend(len(a) * len(b))
-        product = a * b
-        self.hold(len(product))
-        return product
-
 
 def chosen_budget(max_terms: object) -> Budget:
     """The budget of `max_terms` as a caller gives it (None: the default)."""

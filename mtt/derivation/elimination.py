@@ -37,6 +37,7 @@ from dataclasses import dataclass
 
 from sympy.polys.rings import PolyElement, PolyRing
 
+from mtt.derivation import sparse
 from mtt.derivation.budget import Meter
 
 Entries = dict[tuple[int, int], PolyElement]
@@ -86,7 +87,7 @@ class _Elimination:
     def product(self, polys: list[PolyElement]) -> PolyElement:
         result = self.ring.one
         for p in sorted(polys, key=len):
-            result = self.meter.multiply(result, p) if result != 1 else p
+            result = sparse.product(result, p, self.meter) if result != 1 else p
         return result
 
     def pivot(self) -> tuple[int, int] | None:
@@ -173,8 +174,7 @@ class _Elimination:
             total = total + scaled if sign > 0 else total - scaled
         for f, e in divisor.items():
             for _ in range(e):
-                self.meter.spend(len(total) * len(self.factors[f]))
-                total = total.exquo(self.factors[f])
+                total = sparse.exact_quotient(total, self.factors[f], self.meter)
         self.meter.hold(len(total))
         return total
 

@@ -19,7 +19,7 @@ from sympy.polys.domains import ZZ
 from sympy.polys.matrices import DomainMatrix
 from sympy.polys.rings import PolyElement
 
-from mtt.derivation import constants
+from mtt.derivation import constants, sparse
 from mtt.derivation.budget import Meter, TooLarge, refusal
 from mtt.derivation.elimination import bordered_ratio
 from mtt.derivation.equations import Equations
@@ -148,7 +148,7 @@ def _transfer_function(equations: Equations, meter: Meter) -> TransferFunction:
             raise _singular(equations, ": det(sE - A) is identically zero")
         # the last row's multipliers (the others' cancel between the two determinants)
         last = F.convert(denominators.to_dok()[size, size]).numer * scales.get(size, 1)
-        den = meter.multiply(den, last)
+        den = sparse.product(den, last, meter)
         meter.spend(len(num) * len(den))
         # one gcd, in the ring (fractions would take several), with its cofactors (sympy's
         # division takes time quadratic in the terms)
@@ -195,7 +195,7 @@ def _eliminated(entries: dict, size: int, ring, algebraic, meter: Meter):
         return ring.zero, ring.zero
     den = ring.one
     for factor in sorted(ratio.den, key=len):
-        den = meter.multiply(den, factor)
+        den = sparse.product(den, factor, meter)
     return ratio.num, den
 
 
