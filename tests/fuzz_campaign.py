@@ -1,9 +1,12 @@
 """A fuzz campaign: the generators of tests/fuzzing.py, for as many models as you like.
 
 Run: .venv/bin/python tests/fuzz_campaign.py --count 10000 --jobs 2 [--first 0] [--out DIR]
+[--hostile]
 
 Model i is drawn from random.Random(i): a random model when i % 3 is 0, a mutated example
-when it is 1, a well-formed model with random expressions when it is 2. Each runs every
+when it is 1, a well-formed model with random expressions when it is 2; with --hostile,
+a model whose values are hostile constants (tests/hostile_fuzzing.py: roots and logarithms
+of negative numbers, deep nesting, chains of parameters, huge exponentials). Each runs every
 command of `fuzzing.COMMANDS` (check, show, causality, ss, tf, theta, compile, and an import
 of the generated estimator) and of `fuzzing.MORE_COMMANDS` (--symbolic, --keep, --set,
 --unknown) in a worker process. The summary counts
@@ -26,6 +29,9 @@ from pathlib import Path
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
 import fuzzing  # noqa: E402
+import hostile_fuzzing  # noqa: E402
+
+HOSTILE = False  # set by --hostile, before the workers fork
 
 
 def warm() -> None:
@@ -39,7 +45,9 @@ def warm() -> None:
 def one(index: int) -> tuple[int, str, tuple, float, str]:
     """Model `index`: (index, outcome, check's kinds, seconds, report for a finding)."""
     rng = random.Random(index)
-    if index % 3 == 0:
+    if HOSTILE:
+        files = fuzzing.Files(hostile_fuzzing.constant_model(rng), {})
+    elif index % 3 == 0:
         files = fuzzing.random_model(rng)
     elif index % 3 == 1:
         files = fuzzing.example(rng)
@@ -72,7 +80,10 @@ def main() -> None:
     parser.add_argument("--first", type=int, default=0)
     parser.add_argument("--jobs", type=int, default=2)
     parser.add_argument("--out", default="fuzz-findings")
+    parser.add_argument("--hostile", action="store_true", help="models of hostile constants")
     args = parser.parse_args()
+    global HOSTILE
+    HOSTILE = args.hostile
     out = Path(args.out)
     outcomes, kinds = collections.Counter(), collections.Counter()
     slowest: list[tuple[float, int]] = []

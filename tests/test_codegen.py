@@ -15,6 +15,7 @@ import numpy as np
 import pytest
 import sympy
 
+from mtt import files
 from mtt.derivation.parameters import ParameterChoice
 from mtt.derivation.pipeline import theta_for
 from mtt.derivation.theta import Theta
@@ -326,8 +327,8 @@ except SystemExit as exit:
 
 def test_write_atomic_replaces_whole_files_or_nothing(tmp_path, monkeypatch):
     target = tmp_path / "module.py"
-    codegen.write_atomic(target, "old\n")
-    codegen.write_atomic(target, "new\n")
+    files.write_atomic(target, "old\n")
+    files.write_atomic(target, "new\n")
     assert target.read_text() == "new\n"
 
     def refuse(*_):
@@ -335,7 +336,7 @@ def test_write_atomic_replaces_whole_files_or_nothing(tmp_path, monkeypatch):
 
     monkeypatch.setattr(os, "replace", refuse)
     with pytest.raises(OSError):
-        codegen.write_atomic(target, "partial")
+        files.write_atomic(target, "partial")
     assert target.read_text() == "new\n"
     assert [path.name for path in tmp_path.iterdir()] == ["module.py"]
 

@@ -37,9 +37,13 @@ def test_examples_lists_each_model_with_its_description(capsys):
     assert line.split(None, 1)[1].startswith("voltage-driven DC motor with a flexible shaft")
 
 
-def test_examples_copy_into_a_new_directory_and_keep_edits(tmp_path, capsys):
-    target = tmp_path / "mine"
-    status, out, _ = run(capsys, "examples", "--copy", str(target))
+def test_examples_copy_into_a_new_directory_and_keep_edits(tmp_path, capsys, monkeypatch):
+    target = tmp_path / "elsewhere" / "mine"
+    (tmp_path / "work").mkdir()
+    monkeypatch.chdir(tmp_path / "work")  # a new directory outside it: only with --parents
+    status, _, err = run(capsys, "examples", "--copy", str(target))
+    assert status == 2 and "--parents" in err and not target.parent.exists()
+    status, out, _ = run(capsys, "examples", "--copy", str(target), "--parents")
     assert (
         status == 0 and (target / "absorber.bg").read_text() == mtt.example("absorber").read_text()
     )

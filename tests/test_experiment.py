@@ -399,11 +399,16 @@ def test_estimate_with_a_relative_prior_and_absurd_times(tmp_path, capsys):
     assert record["runs"][0]["k"] == pytest.approx(10.0, rel=1e-4)
     scaled = tmp_path / "scaled.csv"
     t = np.linspace(0.0, 10.0, 101)
-    scaled.write_text("t,u,y\n" + "".join(f"{v * 1e300:.17g},1,{v / 10:.17g}\n" for v in t))
+    scaled.write_text("t,u,y\n" + "".join(f"{v * 1e12:.17g},1,{v / 10:.17g}\n" for v in t))
     status, out, err = mtt(capsys, "estimate", DC_DRIVE, "--data", str(scaled), "--k0", "5")
     assert status == 1 and "the filter is too fast for the sampling" in err
     status, out, err = mtt(capsys, "fit", DC_DRIVE, "--data", str(scaled))
     assert status == 2 and "are the times in the model's unit (seconds)?" in err
+    # times of 1e300 cannot be told apart by their steps: refused, said so
+    scaled.write_text("t,u,y\n" + "".join(f"{v * 1e300:.17g},1,{v / 10:.17g}\n" for v in t))
+    for command in (["estimate", "--k0", "5"], ["fit"]):
+        status, out, err = mtt(capsys, command[0], DC_DRIVE, "--data", str(scaled), *command[1:])
+        assert status == 2 and "t[100] is 1e+301: times must stay within 1e+15 in size" in err
 
 
 def test_a_model_named_as_a_python_module_is_refused(tmp_path, capsys):

@@ -4,19 +4,32 @@ from __future__ import annotations
 
 import os
 import stat
+from pathlib import Path
 
 import pytest
 
 import mtt
+from mtt import files
 from mtt.cli.main import main
-from mtt.estimator import codegen
 
 RLC = str(mtt.example("rlc"))
 
 
-def test_a_missing_directory_is_created(tmp_path):
+def test_a_missing_directory_is_created_inside_the_working_directory(tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    files.write_atomic(Path("a") / "b" / "out.txt", "x\n")
+    assert (tmp_path / "a" / "b" / "out.txt").read_text() == "x\n"
+
+
+def test_a_missing_directory_elsewhere_needs_parents(tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "work").mkdir()
+    monkeypatch.chdir(tmp_path / "work")
     target = tmp_path / "a" / "b" / "out.txt"
-    codegen.write_atomic(target, "x\n")
+    with pytest.raises(FileNotFoundError, match=f"the directory {tmp_path / 'a'} does not exist"):
+        files.write_atomic(target, "x\n")
+    assert not (tmp_path / "a").exists()
+    files.write_atomic(target, "x\n", parents=True)
     assert target.read_text() == "x\n"
 
 
@@ -25,11 +38,11 @@ def test_a_symbolic_link_is_written_through(tmp_path):
     real.write_text("old\n")
     link = tmp_path / "link.py"
     link.symlink_to(real)
-    codegen.write_atomic(link, "new\n")
+    files.write_atomic(link, "new\n")
     assert link.is_symlink() and real.read_text() == "new\n"
     dangling = tmp_path / "dangling.py"
     dangling.symlink_to(tmp_path / "sub" / "made.py")
-    codegen.write_atomic(dangling, "made\n")
+    files.write_atomic(dangling, "made\n", parents=True)
     assert (tmp_path / "sub" / "made.py").read_text() == "made\n" and dangling.is_symlink()
 
 
@@ -41,7 +54,7 @@ def test_anything_but_a_regular_file_is_refused_and_kept(tmp_path, kind):
     else:
         target.mkdir()
     with pytest.raises(OSError, match="not replaced"):
-        codegen.write_atomic(target, "x")
+        files.write_atomic(target, "x")
     mode = os.stat(target).st_mode
     assert (stat.S_ISFIFO if kind == "fifo" else stat.S_ISDIR)(mode)
     assert [p.name for p in tmp_path.iterdir()] == ["special"]  # no temporary left
@@ -49,14 +62,14 @@ def test_anything_but_a_regular_file_is_refused_and_kept(tmp_path, kind):
 
 def test_an_empty_name_is_refused(tmp_path):
     with pytest.raises(ValueError, match="empty"):
-        codegen.write_atomic("", "x")
+        files.write_atomic("", "x")
 
 
 def test_replacing_a_file_keeps_its_permissions(tmp_path):
     target = tmp_path / "tool.py"
     target.write_text("old\n")
     target.chmod(0o750)
-    codegen.write_atomic(target, "new\n")
+    files.write_atomic(target, "new\n")
     assert stat.S_IMODE(os.stat(target).st_mode) == 0o750
 
 
@@ -66,8 +79,9 @@ def run(capsys, *argv):
     return status, out, err
 
 
-def test_compile_into_a_directory_writes_model_py_there(tmp_path, capsys):
-    for given in (str(tmp_path), str(tmp_path / "new") + "/"):
+def test_compile_into_a_directory_writes_model_py_there(tmp_path, capsys, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    for given in (str(tmp_path), "new/"):
         status, out, _ = run(capsys, "compile", RLC, "-o", given)
         assert status == 0 and "rlc.py" in out
     assert (tmp_path / "rlc.py").is_file() and (tmp_path / "new" / "rlc.py").is_file()
@@ -93,9 +107,16 @@ def test_model_compile_reports_file_errors_as_mtt_errors(tmp_path):
     assert caught.value.kind == "io" and "not a regular file" in str(caught.value)
 
 
-def test_draw_creates_the_directory_of_its_picture(tmp_path, capsys):
-    out = tmp_path / "figures" / "rlc.svg"
-    status, _, _ = run(capsys, "draw", RLC, "-o", str(out))
+def test_draw_creates_the_directory_of_its_picture(tmp_path, capsys, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    status, _, _ = run(capsys, "draw", RLC, "-o", "figures/rlc.svg")
+    assert status == 0 and (tmp_path / "figures" / "rlc.svg").is_file()
+    (tmp_path / "work").mkdir()
+    monkeypatch.chdir(tmp_path / "work")  # the directory asked for is outside it
+    out = tmp_path / "elsewhere" / "rlc.svg"
+    status, _, err = run(capsys, "draw", RLC, "-o", str(out))
+    assert status == 2 and "--parents" in err and not out.parent.exists()
+    status, _, _ = run(capsys, "draw", RLC, "-o", str(out), "--parents")
     assert status == 0 and out.is_file()
 
 

@@ -6,6 +6,7 @@ from collections.abc import Iterable, Mapping
 from pathlib import Path
 from types import MappingProxyType
 
+from mtt import files
 from mtt.api.exact import exact, exact_point
 from mtt.api.model import Model
 from mtt.derivation import pipeline
@@ -69,6 +70,7 @@ def load(
     max_terms: int | None = None,
     at: Mapping[str, object] | None = None,
     branch: int | None = None,
+    include: str | Path | Iterable[str | Path] | None = None,
 ) -> Model:
     """Read and check a model: a file name (str or Path), or the model's text itself (a str
     with a line break). Raise `MttError` for anything wrong in it.
@@ -84,6 +86,7 @@ def load(
     at, branch: a nonlinear model's operating point ({"u": 3.2}, or states by name) and
         which steady state when there are several: its stages are then those of its
         small-signal model there (see `Model.linearise`).
+    include: directories subsystem files may also come from (docs/security.md).
 
     >>> import mtt
     >>> model = mtt.load('''
@@ -114,6 +117,7 @@ def load(
         budget=chosen_budget(max_terms),
         at=exact_point(at),
         branch=branch,
+        include=files.directories("include", include),
     )
     source = _source(path_or_text)
     graph = build(parse(source), choice.selection)

@@ -11,6 +11,7 @@ from types import ModuleType
 
 import numpy as np
 
+from mtt import files
 from mtt.api import systems
 from mtt.api.exact import exact, exact_point
 from mtt.api.fits import Fit
@@ -223,10 +224,11 @@ class Model:
         """
         return systems.to_control(self, k, known, form, dt, method)
 
-    def compile(self, path: str | Path) -> Path:
+    def compile(self, path: str | Path, *, parents: bool = False) -> Path:
         """Write the standalone estimator module (numpy and scipy only) to `path`, or to
-        MODEL.py inside it when it is a directory; return the file written. For a
-        nonlinear model without an operating point, the module is its simulator.
+        MODEL.py inside it when it is a directory; return the file written (never over the
+        model's files; new directories outside the working directory only with `parents`).
+        For a nonlinear model without an operating point, the module is its simulator.
 
         >>> import mtt, tempfile
         >>> with tempfile.TemporaryDirectory() as folder:
@@ -243,8 +245,8 @@ class Model:
                 theta = self._checked_theta()
                 target = codegen.output_path(str(path), theta)
                 text = codegen.render(theta)
-            codegen.write_atomic(target, text)
-        except (OSError, ValueError) as exc:
+            files.write_atomic(target, text, inputs=self.bondgraph.files, parents=parents)
+        except (OSError, ValueError) as exc:  # (a FileClash is an MttError already)
             name = getattr(exc, "filename", None) or str(path)
             reason = getattr(exc, "strerror", None) or str(exc)
             raise MttError(f"{name}: {reason}", kind="io", file=str(path)) from None

@@ -20,6 +20,7 @@ from dataclasses import dataclass, replace
 from pathlib import Path
 from types import ModuleType
 
+from mtt import files
 from mtt.batch import run, validation, worker
 from mtt.batch.validation import Validation, plain
 from mtt.language.diagnostics import MttError
@@ -114,7 +115,7 @@ def estimator(model) -> Estimator:
     if isinstance(model, Estimator):
         return model
     if isinstance(model, str | Path) and str(model).endswith(".py"):
-        return from_source(Path(model).read_text(encoding="utf-8"))
+        return from_source(files.source_text(model, "a generated module", files.MAX_MODULE_BYTES))
     if isinstance(model, str | Path):
         model = load(model)
     if isinstance(model, Model):
@@ -169,10 +170,10 @@ def records_of(records) -> Iterator[tuple[str, object]]:
 
 
 def expand(pattern: str) -> list[str]:
-    """A path, or the sorted paths that a glob pattern matches (none: an error)."""
+    """A path, or the sorted paths a glob pattern matches (none: an error; see files.glob)."""
     if not glob.has_magic(pattern):
         return [pattern]
-    paths = sorted(glob.glob(pattern, recursive=True))
+    paths = files.glob(pattern)
     if not paths:
         raise MttError(f"no file matches {pattern!r}", kind="io", file=pattern)
     return paths

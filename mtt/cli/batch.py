@@ -24,6 +24,7 @@ CONNECT_TIMEOUT = 10.0  # seconds to reach a --scheduler
 def mode(args) -> str | None:
     """ "each" (per record), "pooled" (pooled by workers), or None (pooled here: fitting.py).
     Expands the patterns of --data in place."""
+    from mtt import files
     from mtt.batch.api import expand
     from mtt.language.diagnostics import MttError
 
@@ -40,12 +41,15 @@ def mode(args) -> str | None:
         args.data = [path for text in data for path in expand(text)]
     except MttError as error:
         raise UsageError(str(error)) from None
+    for path in args.data:  # before any work: each a regular file, none of them an output
+        files.check_input(path, "data")
     if args.per_record or (patterns and not args.pooled):
         return "each"
     return "pooled" if (args.jobs or 1) > 1 or args.scheduler else None
 
 
 def cmd_fit_many(args, kind: str) -> int:
+    from mtt import files
     from mtt.batch import api
     from mtt.cli.experiment import checked_module
     from mtt.cli.fit_options import options
@@ -88,7 +92,7 @@ def cmd_fit_many(args, kind: str) -> int:
         say(f"mtt fit: error: {error}", stderr=True)
     _warnings(batch)
     if args.csv:
-        codegen.write_atomic(args.csv, _table_csv(module, batch))
+        files.write_atomic(args.csv, _table_csv(module, batch))
     if args.json:
         say(json.dumps({"ok": batch.ok, "records": [o.record() for o in batch]}))
     else:
@@ -136,6 +140,12 @@ def _named(outcome) -> str:
     return outcome.error if named else f"{outcome.name}: {outcome.error}"
 
 
+def _place(outcome) -> tuple[str, int | None]:
+    """The file and line of a record's error (its message starts FILE:LINE: for a line)."""
+    line = outcome.error.removeprefix(f"{outcome.name}:").partition(":")[0]
+    return outcome.name, int(line) if line.isdigit() else None
+
+
 def _pooled(module, args, batch, errors: list[str]) -> int:
     from mtt.present.fits import fit_text, validation_lines
 
@@ -143,7 +153,8 @@ def _pooled(module, args, batch, errors: list[str]) -> int:
         for error in errors[1:]:
             say(f"mtt fit: error: {error}", stderr=True)
         more = f" ({len(errors)} of {len(batch)} records could not be read)"
-        raise UsageError(errors[0] + (more if len(errors) > 1 else ""))
+        first = next(outcome for outcome in batch if outcome.error is not None)
+        raise UsageError(errors[0] + (more if len(errors) > 1 else ""), *_place(first))
     if batch.pooled is None:
         raise UsageError("no records to fit")
     result = batch.pooled

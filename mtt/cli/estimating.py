@@ -16,11 +16,11 @@ from types import ModuleType
 import numpy as np
 from tqdm import tqdm
 
+from mtt import files
 from mtt.cli import unknowns
 from mtt.cli.experiment import experiment_data, hold_of, module_for, signal_label
 from mtt.cli.running import EXIT_OK, EXIT_STOPPED, UsageError, say, warn
 from mtt.data.records import Record
-from mtt.estimator import codegen
 from mtt.present import estimates, values
 from mtt.present.estimates import Run
 
@@ -133,7 +133,7 @@ def cmd_estimate(args) -> int:
             title=f"{module.MODEL}: normalised cost at t = {data.t[-1]:g}", dpi=args.dpi,
         )  # fmt: skip
     if args.csv:
-        codegen.write_atomic(args.csv, estimates.trajectories_csv(module, runs))
+        files.write_atomic(args.csv, estimates.trajectories_csv(module, runs))
     for run in runs:
         for kind, text in estimates.notes(module, run):
             start = estimates.start_text(module, run)

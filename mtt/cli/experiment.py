@@ -11,6 +11,7 @@ import json
 import sys
 from types import ModuleType
 
+from mtt import files
 from mtt.cli import unknowns
 from mtt.cli.options import choice_from_args
 from mtt.cli.running import EXIT_OK, UsageError
@@ -112,7 +113,7 @@ def cmd_compile(args) -> int:
     theta = pipeline.theta_for(args.file, choice)
     source = codegen.render(theta)
     path = codegen.output_path(args.path, theta)
-    codegen.write_atomic(path, source)
+    files.write_atomic(path, source)
     kept = f", {', '.join(theta.symbols)} kept symbolic" if theta.symbols else ""
     if args.json:
         print(json.dumps({"ok": True, "path": str(path), "model": theta.model,
@@ -161,7 +162,7 @@ def cmd_simulate(args) -> int:
             output_label=signal_label(module, "output"), dpi=args.dpi,
         )  # fmt: skip
     if args.csv:
-        codegen.write_atomic(
+        files.write_atomic(
             args.csv, tables.csv_text(["t", "u", "y"], zip(data.t, data.u, data.y, strict=True))
         )
     if args.json:

@@ -13,11 +13,11 @@ from itertools import zip_longest
 
 import numpy as np
 
+from mtt import files
 from mtt.cli.experiment import experiment_data, module_for, signal_label
 from mtt.cli.fit_options import options
 from mtt.cli.running import EXIT_OK, EXIT_STOPPED, UsageError, say, warn
 from mtt.data.records import columns, read
-from mtt.estimator import codegen
 from mtt.present import fits, tables
 
 
@@ -69,7 +69,7 @@ def cmd_fit(args) -> int:
             for number, (data, fitted) in enumerate(zip(records, result.fitted, strict=True), 1)
             for t, u, y, fitted in zip(data.t, data.u, data.y, fitted, strict=True)
         )
-        codegen.write_atomic(
+        files.write_atomic(
             args.csv, tables.csv_text(["record", "t", "u", "y", "fitted", "residual"], rows)
         )
     if args.json:

@@ -8,20 +8,24 @@ command pays for another's libraries (tests/test_cli_startup.py holds this).
 from __future__ import annotations
 
 import argparse
+import contextlib
 import json
 import os
 import sys
 import traceback
 from typing import TYPE_CHECKING
 
+from mtt import files
 from mtt.cli import experiment_args, identify, loading, operating, views
 from mtt.cli.options import (
     Parser,
+    add_output_options,
     add_parameter_options,
     add_selection_options,
     choice_from_args,
     selection_from_args,
 )
+from mtt.derivation import deadline
 from mtt.language.diagnostics import ModelError, MttError
 from mtt.version import __version__
 
@@ -29,6 +33,8 @@ if TYPE_CHECKING:
     from mtt.language.bondgraph import BondGraph
 
 EXIT_OK, EXIT_MODEL_ERROR, EXIT_BUG = 0, 2, 3
+WRITERS = ("compile", "simulate", "estimate", "fit", "draw", "bode", "examples")
+OUTPUTS = ("out", "path", "csv", "plot", "data_plot", "cost_plot")  # options naming files written
 BUG_REPORT = (
     "mtt: internal error: {error}\n"
     "This is a bug in mtt, not in your model. Please report it on the mtt issue tracker\n"
@@ -287,11 +293,27 @@ def make_parser() -> argparse.ArgumentParser:
     identify.register(commands)
     operating.register(commands)
     views.register(commands)
+    for name in WRITERS:
+        add_output_options(commands.choices[name])
     return parser
+
+
+def _outputs(args) -> list[str]:
+    """The files the command line names for writing (compile -o may be a directory)."""
+    return [value for name in OUTPUTS if isinstance(value := getattr(args, name, None), str)]
+
+
+def _tolerant_output() -> None:
+    """Text a terminal's encoding cannot show (a model's non-ASCII description on an ASCII
+    stdout) is escaped, not an error."""
+    for stream in (sys.stdout, sys.stderr):
+        with contextlib.suppress(AttributeError, ValueError):  # not a text file: leave it
+            stream.reconfigure(errors="backslashreplace")
 
 
 def main(argv: list[str] | None = None) -> int:
     argv = sys.argv[1:] if argv is None else list(argv)
+    _tolerant_output()
     try:
         args = make_parser().parse_args(argv)
     except UsageExit as exc:  # --json promises {"ok": false, ...} for every failure
@@ -299,7 +321,9 @@ def main(argv: list[str] | None = None) -> int:
             _print_json(MttError(exc.message, kind="usage").to_json())
         raise
     try:
-        status = args.run(args)
+        outputs, parents = _outputs(args), getattr(args, "parents", False)
+        with files.session(outputs, parents), deadline.budget(getattr(args, "time_limit", None)):
+            status = args.run(args)
         sys.stdout.flush()  # a closed pipe shows here, inside the handlers below
         return status
     except MttError as exc:  # a ModelError renders every problem in the model

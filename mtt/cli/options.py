@@ -106,6 +106,42 @@ def add_selection_options(parser: argparse.ArgumentParser) -> None:
             help=f"the {what} to use as the {role}, over the file's '{role}' statement "
             f"(e.g. {example})",
         )
+    group.add_argument(
+        "--time-limit",
+        metavar="SECONDS",
+        type=_seconds,
+        help="stop deriving after this long with a too_large error (default 30, or "
+        "MTT_TIME_LIMIT from the environment; inf for none)",
+    )
+    group.add_argument(
+        "--include",
+        metavar="DIR",
+        type=given,
+        action="append",
+        default=[],
+        help="also read subsystem files from DIR (by default only the model's directory tree "
+        "and mtt's shipped parts)",
+    )
+
+
+def _seconds(text: str) -> float:
+    try:
+        seconds = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a number of seconds, not {text!r}") from None
+    if not seconds > 0:  # also refuses nan
+        raise argparse.ArgumentTypeError(f"must be above 0 seconds, not {text!r}")
+    return seconds
+
+
+def add_output_options(parser: argparse.ArgumentParser) -> None:
+    """What every command that writes files takes."""
+    parser.add_argument(
+        "--parents",
+        action="store_true",
+        help="create missing directories of the files written anywhere (by default only "
+        "inside the working directory)",
+    )
 
 
 def add_parameter_options(parser: argparse.ArgumentParser) -> None:
@@ -168,7 +204,7 @@ def _unknowns(args: argparse.Namespace) -> tuple[str, ...] | None:
 def selection_from_args(args: argparse.Namespace) -> Selection:
     from mtt.language.bondgraph import Selection
 
-    return Selection(_unknowns(args), args.input, args.output)
+    return Selection(_unknowns(args), args.input, args.output, tuple(args.include))
 
 
 def choice_from_args(args: argparse.Namespace) -> ParameterChoice:
@@ -186,6 +222,7 @@ def choice_from_args(args: argparse.Namespace) -> ParameterChoice:
         budget=DEFAULT_BUDGET if terms is None else Budget(terms),
         at=MappingProxyType(dict(args.at)) if getattr(args, "at", None) else None,
         branch=getattr(args, "branch", None),
+        include=tuple(args.include),
     )
 
 

@@ -21,7 +21,12 @@ EXIT_OK, EXIT_STOPPED, EXIT_USAGE = 0, 1, 2
 
 
 class UsageError(Exception):
-    """Options or data that do not make an experiment; the message says why."""
+    """Options or data that do not make an experiment; the message says why (and `path`,
+    `line` where, for a data file's problem, as a generated module's CSVError does)."""
+
+    def __init__(self, message: str, path: str | None = None, line: int | None = None):
+        super().__init__(message)
+        self.path, self.line = path, line
 
 
 def guarded(action: Callable[[argparse.Namespace], int]) -> Callable[[argparse.Namespace], int]:
@@ -31,7 +36,7 @@ def guarded(action: Callable[[argparse.Namespace], int]) -> Callable[[argparse.N
     the estimator's checks turn into messages, are not shown."""
 
     def run(args) -> int:
-        message = None
+        message, where = None, {"file": getattr(args, "file", None), "kind": "usage", "line": None}
         try:
             import numpy as np
 
@@ -46,15 +51,19 @@ def guarded(action: Callable[[argparse.Namespace], int]) -> Callable[[argparse.N
             message = as_options(exc)
         except (UsageError, ValueError) as exc:
             message = str(exc)
+            if getattr(exc, "path", None) is not None:  # a module's CSVError, or as one
+                kind = getattr(exc, "kind", "bad_data")
+                where = {"file": exc.path, "kind": kind, "line": exc.line}
         except BrokenPipeError:  # stdout closed by its reader: main's business, not an error
             raise
         except OSError as exc:
             message = f"{exc.filename}: {exc.strerror}" if exc.filename else str(exc)
+            if exc.filename:
+                where = {"file": exc.filename, "kind": "io", "line": None}
         message = for_command_line(message)
         print(f"mtt {args.command}: error: {message}", file=sys.stderr)
         if getattr(args, "json", False):
-            error = {"file": getattr(args, "file", None), "kind": "usage", "line": None,
-                     "column": None, "message": message, "notes": []}  # fmt: skip
+            error = {**where, "column": None, "message": message, "notes": []}
             print(json.dumps({"ok": False, "errors": [error]}))
         return EXIT_USAGE
 

@@ -2,7 +2,8 @@
 input read from a file) through the model's generated module, with optional noise.
 
 The generated module does the numerical work (read_csv, input_signal, simulate,
-with_noise); what is here chooses the grid, checks the settings, names the file a record
+with_noise); files are checked and noted by mtt.files first (a regular file, not one the
+command writes); what is here chooses the grid, checks the settings, names the file a record
 came from and says in a note how each record was made (tables and figures print it).
 """
 
@@ -17,6 +18,7 @@ from types import ModuleType
 
 import numpy as np
 
+from mtt import files
 from mtt.data import (
     DEFAULT_DT,
     DEFAULT_SEED,
@@ -56,6 +58,7 @@ def columns(given: str | Sequence[str] | None) -> tuple[str, str, str]:
 def read(module: ModuleType, path: str, names: Sequence[str] = COLUMNS) -> Record:
     """A measured record: the columns `names` (time, input, output) of a CSV file, its
     times increasing strictly."""
+    files.check_input(path, "data")  # a regular file of bounded size, not an output
     delimiter = _delimiter(path)
     try:
         if delimiter == ",":
@@ -65,10 +68,13 @@ def read(module: ModuleType, path: str, names: Sequence[str] = COLUMNS) -> Recor
                 commas = Path(folder) / Path(path).name
                 commas.write_text(_with_commas(path, delimiter), encoding="utf-8")
                 t, u, y = module.read_csv(str(commas), tuple(names))
-    except ValueError as error:
+    except ValueError as error:  # the module's CSVError: its file, line and kind kept
         text = str(error).replace(str(commas), str(path)) if delimiter != "," else str(error)
         if "no column" not in text:
-            raise ValueError(text) from None
+            error.args = (text,)
+            if hasattr(error, "path"):
+                error.path = str(path)
+            raise
         raise DataError(
             f"{text}: name the time, input and output with columns T,U,Y (now {','.join(names)})",
             "columns",
@@ -107,7 +113,10 @@ def _with_commas(path: str, delimiter: str) -> str:
     """The file's text with `delimiter` between fields, as the module's reader takes it."""
     with open(path, encoding="utf-8-sig", newline="") as file:
         rows = csv.reader(file, delimiter=delimiter)
-        return tables.csv_text(next(rows, []), rows)
+        try:
+            return tables.csv_text(next(rows, []), rows)
+        except csv.Error as error:  # a field over csv's limit, say
+            raise ValueError(f"{path}:{rows.line_num}: not a CSV file: {error}") from None
 
 
 def input_signal(
@@ -130,7 +139,7 @@ def input_signal(
                 "multisine); the file gives the times",
                 *("t_end", "dt", "period", "signal"),
             )
-        t, u = module.read_csv(kind, ("t", "u"))
+        t, u = module.read_csv(files.check_input(kind, "an input signal"), ("t", "u"))
         return t, u if amplitude is None else amplitude * u, kind
     t_end = DEFAULT_T_END if t_end is None else t_end
     dt = DEFAULT_DT if dt is None else dt

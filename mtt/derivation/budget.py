@@ -17,6 +17,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+from mtt.derivation import deadline
 from mtt.language.bondgraph import BondGraph
 from mtt.language.diagnostics import ModelError, MttError, error
 
@@ -75,7 +76,9 @@ class Meter:
             raise TooLarge(self.stage, "terms", terms, self.budget.max_terms)
 
     def spend(self, work: int) -> None:
-        """`work` products of two terms are about to be done."""
+        """`work` products of two terms are about to be done (and the time limit, the
+        other side of the budget, is checked: mtt.derivation.deadline)."""
+        deadline.check()
         self.work += work
         if self.work > self.budget.max_work:
             raise TooLarge(self.stage, "work", self.work, self.budget.max_work)

@@ -31,6 +31,8 @@ import numpy as np
 from sympy import prevprime
 from sympy.polys.rings import PolyElement
 
+from mtt.derivation import deadline
+
 MAX_POINTS = 1 << 14  # grid points: beyond, the caller eliminates over the polynomials
 PRIME_LIMIT = 1 << 31
 MAX_BITS = 60_000  # Hadamard's bound on the coefficients: beyond, `TooLarge`
@@ -181,6 +183,7 @@ def _eliminate(plan: _Plan, values: dict, shape: tuple[int, int], mods: np.ndarr
     scales = {True: np.ones(shape, dtype=np.int64), False: np.ones(shape, dtype=np.int64)}
     bad = np.zeros(shape, dtype=bool)
     for r, c, targets in plan.steps:
+        deadline.check()
         pivot_row = rows.pop(r)
         pivot = pivot_row.pop(c)
         bad |= pivot == 0
@@ -203,6 +206,7 @@ def _det_mod(rows: dict[int, dict[int, int]], size: int, p: int) -> int:
     rows = {i: dict(row) for i, row in rows.items() if i < size}
     product_, pairs = 1, []
     for c in range(size):
+        deadline.check()
         candidates = [i for i, row in rows.items() if row.get(c, 0) % p]
         if not candidates:
             return 0

@@ -20,6 +20,7 @@ import sympy
 from sympy.polys.domains.domain import Domain
 from sympy.polys.matrices import DomainMatrix
 
+from mtt.derivation import deadline
 from mtt.derivation.budget import DEFAULT_BUDGET, Budget
 from mtt.derivation.causality import CausalBondGraph
 from mtt.derivation.constants import Constants, Unsupported
@@ -154,6 +155,7 @@ def imposed(causal: CausalBondGraph, component: Component, v: PortVariables) -> 
     return names
 
 
+@deadline.timed("the equations", lambda causal: causal.bondgraph)
 def derive(
     causal: CausalBondGraph, parametrisation: Parametrisation, budget: Budget = DEFAULT_BUDGET
 ) -> Equations:
@@ -180,6 +182,7 @@ def derive(
         return solve(rows, list(outputs), K)
 
     for component in graph.components:
+        deadline.check()
         v = _port_variables(causal, component, values.get(component.name), signals[component.name])
         solved, free, left = _solved(component, v, imposed(causal, component, v), relation)
         explicit.update(solved)

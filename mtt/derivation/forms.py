@@ -17,6 +17,8 @@ from collections.abc import Mapping
 import networkx as nx
 from sympy.polys.domains.domain import Domain
 
+from mtt.derivation import deadline
+
 Form = dict  # variable name -> coefficient (a domain element): a linear combination
 
 
@@ -64,6 +66,7 @@ def solve(
     free_rows = set(range(len(rows)))
     pivots: list[tuple[int, str]] = []
     for column in unknowns + others:
+        deadline.check()
         candidates = sorted(where.get(column, set()) & free_rows)
         if not candidates:
             continue
@@ -125,6 +128,7 @@ def eliminate(explicit: dict[str, Form], K: Domain) -> tuple[dict[str, Form], li
     constraints: list[Form] = []
 
     for node in reversed(list(nx.topological_sort(condensed))):
+        deadline.check()
         members = sorted(condensed.nodes[node]["members"])
         if len(members) == 1 and not depends.has_edge(members[0], members[0]):
             resolved[members[0]] = substitute(explicit[members[0]], resolved, K)

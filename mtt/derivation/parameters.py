@@ -42,11 +42,12 @@ class ParameterChoice:
     # which steady state when there are several (1-based); None: the model as it is
     at: MappingProxyType | None = None
     branch: int | None = None
+    include: tuple[str, ...] = ()  # directories subsystem files may also come from
 
     @property
     def selection(self) -> Selection:
         """The part of the choice that building the bond graph needs."""
-        return Selection(self.unknowns, self.input, self.output)
+        return Selection(self.unknowns, self.input, self.output, self.include)
 
 
 @dataclass(frozen=True)

@@ -19,7 +19,7 @@ from sympy.polys.domains import ZZ
 from sympy.polys.matrices import DomainMatrix
 from sympy.polys.rings import PolyElement
 
-from mtt.derivation import constants, sparse
+from mtt.derivation import constants, deadline, sparse
 from mtt.derivation.budget import Meter, TooLarge, refusal
 from mtt.derivation.elimination import bordered_ratio
 from mtt.derivation.equations import Equations
@@ -100,6 +100,7 @@ def _singular(equations: Equations, why: str) -> ModelError:
     )
 
 
+@deadline.timed("the transfer function", lambda equations: equations.causal.bondgraph)
 def transfer_function(equations: Equations) -> TransferFunction:
     """G(s) = C (sE - A)^-1 B + D; raise `ModelError` (singular_model) if it does not exist.
 

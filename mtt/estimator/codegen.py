@@ -10,16 +10,13 @@ is safe to run, and the same Theta always gives the same bytes.
 
 from __future__ import annotations
 
-import errno
 import importlib.machinery
 import keyword
 import linecache
 import math
 import os
 import re
-import stat
 import sys
-import tempfile
 import textwrap
 import types
 from functools import cache
@@ -347,45 +344,6 @@ def module_path(given: str | None, model: str, refuse) -> Path:
             f"{path.name} would shadow it wherever it is imported; choose another file name"
         )
     return path
-
-
-def write_atomic(path: str | Path, data: str | bytes) -> None:
-    """Write a file so that readers see the old content or the new, never a part.
-
-    A missing directory is created; a symbolic link is written through (its target is
-    replaced, the link stays); anything that is not a regular file (a device such as
-    /dev/null, a fifo, a directory) is refused, never replaced.
-    """
-    if not str(path):
-        raise ValueError("an empty file name")
-    target = Path(os.path.realpath(path))
-    mode = None
-    try:
-        status = os.stat(target)
-    except FileNotFoundError:
-        target.parent.mkdir(parents=True, exist_ok=True)
-    else:
-        if not stat.S_ISREG(status.st_mode):
-            what = "a directory" if stat.S_ISDIR(status.st_mode) else "not a regular file"
-            raise OSError(errno.EEXIST, f"{what}: not replaced", str(path))
-        mode = stat.S_IMODE(status.st_mode)
-    payload = data.encode("utf-8") if isinstance(data, str) else data
-    try:
-        handle, temporary = tempfile.mkstemp(dir=target.parent, prefix=f".{target.name}.")
-    except OSError as exc:  # name the file asked for, not the temporary one
-        raise OSError(exc.errno, exc.strerror, str(path)) from None
-    try:
-        with os.fdopen(handle, "wb") as file:
-            file.write(payload)
-        if mode is None:
-            umask = os.umask(0)
-            os.umask(umask)
-            mode = 0o666 & ~umask
-        os.chmod(temporary, mode)
-        os.replace(temporary, target)
-    except BaseException:
-        Path(temporary).unlink(missing_ok=True)
-        raise
 
 
 def load(theta: Theta) -> types.ModuleType:

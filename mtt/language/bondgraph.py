@@ -52,11 +52,12 @@ class Port:
 @dataclass(frozen=True)
 class Selection:
     """What the command line chooses over the file: the unknowns (in order), the input and
-    the output (TYPE:NAME)."""
+    the output (TYPE:NAME), and the directories subsystem files may also come from."""
 
     unknowns: tuple[str, ...] | None = None  # None: the `unknown` declarations, in order
     input: str | None = None
     output: str | None = None
+    include: tuple[str, ...] = ()  # --include DIR: beyond the model's tree and shipped parts
 
 
 @dataclass(frozen=True)
@@ -92,6 +93,11 @@ class BondGraph:
     @property
     def components(self) -> tuple[Component, ...]:
         return tuple(self.named.values())
+
+    @property
+    def files(self) -> tuple[str, ...]:
+        """The files the model was read from: its own and its subsystems' (as named)."""
+        return (self.source.name, *dict.fromkeys(s.file for s in self.subsystems))
 
     @property
     def open_ports(self) -> tuple[str, ...]:
@@ -274,11 +280,12 @@ def build(parsed: ParsedModel, selection: Selection | None = None, part: bool = 
     if parsed.header is None or not parsed.bonds:
         what = "no statement" if parsed.header is None else "no bond"
         raise ModelError(parsed.source, [error("empty_model", f"the model has {what}")])
-    root, problems = load_tree(parsed)
+    selection = selection or Selection()
+    root, problems = load_tree(parsed, selection.include)
     checks = _check_files(root, part)
     assembly = assemble(root, checks)
     part = part and any(c.type.role is Role.PORT for c in checks[root.name].components.values())
-    whole = _Whole(root, assembly, selection or Selection(), part)
+    whole = _Whole(root, assembly, selection, part)
     unknowns = whole.unknowns()
     input_name = whole.choose_port(Role.SOURCE)
     output_name = whole.choose_port(Role.DETECTOR)

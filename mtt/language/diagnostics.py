@@ -45,6 +45,22 @@ class Source:
         return diagnostic.render(self)
 
 
+QUOTE_WIDTH = 100  # characters of the offending line a diagnostic quotes, at most
+
+
+def quoted(line: str, column: int) -> tuple[str, int]:
+    """The part of `line` a diagnostic quotes, at most `QUOTE_WIDTH` characters around
+    `column` ("..." where it is cut), and the column within it: a diagnostic shows the
+    place, never a whole long line of the file."""
+    text = line.expandtabs(1)
+    if len(text) <= QUOTE_WIDTH:
+        return text, column
+    start = max(0, min(column - 1 - QUOTE_WIDTH // 2, len(text) - QUOTE_WIDTH))
+    before = "..." if start else ""
+    after = "..." if start + QUOTE_WIDTH < len(text) else ""
+    return before + text[start : start + QUOTE_WIDTH] + after, column - start + len(before)
+
+
 @dataclass(frozen=True)
 class Inclusion:
     """A `subsystem` statement that brought a file into the model."""
@@ -129,9 +145,9 @@ class Diagnostic:
         lines = [f"{where}: {self.severity.value}[{self.kind}]: {self.message}"]
         if self.position and source:
             number = str(self.position.line)
-            text = source.line(self.position.line).expandtabs(1)
+            text, column = quoted(source.line(self.position.line), self.position.column)
             pad = " " * len(number)
-            caret = " " * (self.position.column - 1) + "^"
+            caret = " " * (column - 1) + "^"
             lines += [f" {number} | {text}", f" {pad} | {caret}"]
         lines += [f"note: {note}" for note in self.notes]
         return "\n".join(lines)

@@ -277,7 +277,10 @@ class Measure:
     """What is known of an expression before any algebra, to keep it within the limits.
 
     `exact` is its value when it is a rational number; `approx` a float value of a
-    constant that is not rational (pi, roots, functions); `degree` bounds the degrees of
+    constant that is not rational (pi, roots, functions) and `bounds` an interval sure to
+    hold it (None when unknown), which decides the sign of the argument of a root or a
+    logarithm before sympy is asked (sympy's work on a logarithm of a logarithm of a
+    negative number grows exponentially with the nesting); `degree` bounds the degrees of
     its numerator and denominator in its atoms (names, signals, constants, functions)
     once written as one fraction, `terms` their numbers of terms, and `digits` the
     decimal digits of their coefficients; `depth` and `size` count its nodes.
@@ -285,6 +288,7 @@ class Measure:
 
     exact: Fraction | None = None
     approx: float | None = None
+    bounds: tuple[float, float] | None = None
     degree: tuple[int, int] = (0, 0)
     terms: tuple[int, int] = (1, 1)
     digits: tuple[float, float] = (0.0, 0.0)

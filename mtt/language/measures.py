@@ -24,6 +24,7 @@ from dataclasses import replace
 from fractions import Fraction
 from graphlib import TopologicalSorter
 
+from mtt.language import intervals
 from mtt.language.diagnostics import Diagnostic, Position, error
 from mtt.language.expressions import (
     ATOM,
@@ -49,7 +50,8 @@ MAX_TERMS = 10_000
 MAX_MAGNITUDE = 1e300
 MAX_EXP_ARGUMENT = 690  # exp(690) ~ 1e300
 
-PI = Measure(approx=math.pi, degree=(1, 0))
+PI = Measure(approx=math.pi, bounds=intervals.widened(math.pi, math.pi), degree=(1, 0))
+DIGITS_LIMIT = 10**MAX_DIGITS  # a numerator or denominator this large has too many digits
 
 
 class Problem(Exception):
@@ -91,7 +93,7 @@ def _digits(value: Fraction) -> float:
 
 def rational(value: Fraction, where: Position) -> Measure:
     """The measure of a rational number, which must have at most `MAX_DIGITS` digits."""
-    if _digits(value) > MAX_DIGITS:
+    if abs(value.numerator) >= DIGITS_LIMIT or value.denominator >= DIGITS_LIMIT:
         raise Problem("syntax", "number out of range", where)
     return Measure(exact=value, digits=(_log10(value.numerator), _log10(value.denominator)))
 
@@ -103,6 +105,14 @@ def _float(m: Measure) -> float | None:
         return float(m.exact)
     except OverflowError:
         return math.inf if m.exact > 0 else -math.inf
+
+
+def _interval(m: Measure) -> intervals.Interval | None:
+    """An interval sure to hold the value of `m` (None: unknown)."""
+    if m.exact is None:
+        return m.bounds
+    value = _float(m)
+    return intervals.widened(value, value)
 
 
 def _root(value: int, order: int) -> int | None:
@@ -190,15 +200,20 @@ def arithmetic(
     approx, x, y = None, _float(a), _float(b)
     if x is not None and y is not None and (operator != "/" or y != 0):
         approx = {"+": x + y, "-": x - y, "*": x * y}[operator] if operator != "/" else x / y
+    bounds = intervals.combined(operator, _interval(a), _interval(b))
     depth = max(a.depth if chained else a.depth + 1, b.depth + 1)
-    return check(Measure(None, approx, degree, terms, digits, depth, a.size + b.size + 1), where)
+    measure = Measure(None, approx, bounds, degree, terms, digits, depth, a.size + b.size + 1)
+    return check(measure, where)
 
 
 def negative(a: Measure, where: Position) -> Measure:
     if a.exact is not None:
         return rational(-a.exact, where)
     approx = None if a.approx is None else -a.approx
-    return check(replace(a, approx=approx, depth=a.depth + 1, size=a.size + 1), where)
+    bounds = None if a.bounds is None else (-a.bounds[1], -a.bounds[0])
+    return check(
+        replace(a, approx=approx, bounds=bounds, depth=a.depth + 1, size=a.size + 1), where
+    )
 
 
 def _rational_power(b: Fraction, x: Fraction, where: Position) -> Fraction | None:
@@ -207,21 +222,22 @@ def _rational_power(b: Fraction, x: Fraction, where: Position) -> Fraction | Non
     out_of_range = Problem("syntax", "power out of range", where)
     if b == 0 and x < 0:
         raise Infinite("power out of range: 0 to a negative power", where)
-    if b in (0, 1) or (b == -1 and x.denominator == 1):
+    if b < 0 and x.denominator != 1:
+        raise _not_real_power(f"({b})^({x})", where)
+    if b in (0, 1, -1):
         return b ** int(x) if x.denominator == 1 else b
     if abs(x) > MAX_DIGITS / _digits(b):  # b is not 0, 1 or -1: it has digits
         raise out_of_range
     if x.denominator == 1:
         return b ** int(x)
-    if b < 0:
-        raise Problem(
-            "bad_value",
-            f"({b})^({x}) is not a real number (a negative number to a fractional power)",
-            where,
-        )
     if _digits(b) > MAX_ROOT_DIGITS or x.denominator > MAX_DEGREE:
         raise out_of_range
     return _exact_power(b, x)
+
+
+def _not_real_power(written: str, where: Position) -> Problem:
+    message = f"{written} is not a real number (a negative number to a fractional power)"
+    return Problem("bad_value", message, where)
 
 
 def power(base: Measure, exponent: Measure, where: Position) -> Measure:
@@ -234,6 +250,11 @@ def power(base: Measure, exponent: Measure, where: Position) -> Measure:
     depth, size = max(base.depth, exponent.depth) + 1, base.size + exponent.size + 1
     approx, x, y = None, _float(base), _float(exponent)
     integral = n is not None and n.denominator == 1
+    if n is not None and not integral and intervals.negative(_interval(base)):
+        raise _not_real_power(f"(about {x:.6g})^({n})", where)
+    exact_power = integral and abs(n) < 1 << 30  # an integer power: exactly that exponent
+    exponent_bounds = (float(n), float(n)) if exact_power else _interval(exponent)
+    bounds = intervals.power(_interval(base), exponent_bounds)
     if x is not None and y is not None and (x > 0 or (integral and x != 0)):
         try:
             approx = x ** (int(n) if integral and abs(n) < 1 << 30 else y)
@@ -246,6 +267,7 @@ def power(base: Measure, exponent: Measure, where: Position) -> Measure:
             bn, bd, tn, td, dn, dd = bd, bn, td, tn, dd, dn
         measure = Measure(
             approx=approx,
+            bounds=bounds,
             degree=(k * bn, k * bd),
             terms=(_multisets(tn, k), _multisets(td, k)),
             digits=(k * (dn + math.log10(tn)), k * (dd + math.log10(td))),
@@ -259,7 +281,8 @@ def power(base: Measure, exponent: Measure, where: Position) -> Measure:
         degree = math.ceil(abs(n)) * max(sum(base.degree), 1)
     else:
         degree = 1
-    return check(Measure(approx=approx, degree=(degree, 0), depth=depth, size=size), where)
+    measure = Measure(approx=approx, bounds=bounds, degree=(degree, 0), depth=depth, size=size)
+    return check(measure, where)
 
 
 def _function_value(function: str, value: Fraction, where: Position) -> Fraction | None:
@@ -308,14 +331,26 @@ def call(function: str, arguments: list[Measure], where: Position) -> Measure:
     if function == "exp" and x is not None and abs(x) > MAX_EXP_ARGUMENT:
         message = f"argument of exp out of range (at most {MAX_EXP_ARGUMENT} in size)"
         raise Problem("syntax", message, where)
-    # an irrational argument's sign is decided exactly, later
+    n = argument.exact
+    if function == "exp" and n is not None and n.denominator == 1 and abs(n) > MAX_DEGREE:
+        # e is a variable of the derivation: exp(n) is e^n, of degree n in it
+        message = f"exp({n}) is out of range: a power of e above {MAX_DEGREE} (write its value)"
+        raise Problem("syntax", message, where)
+    bounds = _interval(argument)
+    if function in ("sqrt", "log") and intervals.negative(bounds):  # (not in complex numbers)
+        about = f"about {(bounds[0] + bounds[1]) / 2:.6g}"
+        message = f"{function} of a negative number ({about}) is not a real number"
+        raise Problem("bad_value", message, where)
+    # an argument's sign not decided by its bounds is decided exactly, later
     if x is not None and (x > 0 or function not in ("sqrt", "log")) and math.isfinite(x):
         try:
             approx = _APPROX.get(function, getattr(math, function, None))(x)
         except (OverflowError, ValueError):  # tan near a pole, say: no estimate
             approx = None
     depth, size = argument.depth + 1, argument.size + 1
-    return check(Measure(approx=approx, degree=(1, 0), depth=depth, size=size), where)
+    bounds = intervals.function(function, bounds)
+    measure = Measure(approx=approx, bounds=bounds, degree=(1, 0), depth=depth, size=size)
+    return check(measure, where)
 
 
 def _extremum(function: str, arguments: list[Measure], where: Position) -> Measure:

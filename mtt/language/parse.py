@@ -375,6 +375,20 @@ def parse(source: Source) -> ParsedModel:
     )
 
 
+def begins_as_model(source: Source) -> bool:
+    """Whether the first statement of the text (blank lines and comments aside) is a
+    `model NAME` line: what a file must at least be to be reported as a model."""
+    first = next((line for line in source.lines if not _BLANK.fullmatch(line)), None)
+    if first is None or len(first) > MAX_LINE:
+        return False
+    try:
+        tree = _parser().parse(first + "\n", start="line")
+    except lark.exceptions.UnexpectedInput:
+        return False
+    items = _ToModel([], 1).transform(tree).children
+    return bool(items) and isinstance(items[0], ModelHeader)
+
+
 def _first_position(statement) -> Position:
     return statement.tail.position if isinstance(statement, BondText) else statement.position
 

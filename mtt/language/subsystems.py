@@ -3,11 +3,15 @@
 A `subsystem NAME = "FILE.bg"` statement reads another model file, relative to the
 directory of the file that names it. Those files are as untrusted as the model itself:
 only regular `.bg` files of bounded size are read (no devices, pipes or directories, no
-absolute paths), a file that includes itself (by any path or link) is
-`cyclic_subsystem`, and the nesting depth and the number of instances are bounded, so
-that a few small files cannot make the compiler do unbounded work. Each file is read and
-parsed once however often it is used; its problems are reported at its own lines,
-followed by the chain of subsystem statements that brought it in.
+absolute paths: see mtt.files), and only inside the model's own directory tree, the
+shipped parts (mtt's models/ directory) or a directory the user includes (`--include
+DIR`, `include=`), wherever a link leads; a file that does not begin as a model
+(`model NAME`) is one error naming it, never quoting it (a link to a file of secrets must
+not echo them). A file that includes itself (by any path or link) is `cyclic_subsystem`,
+and the nesting depth and the number of instances are bounded, so that a few small files
+cannot make the compiler do unbounded work. Each file is read and parsed once however
+often it is used; its problems are reported at its own lines, followed by the chain of
+subsystem statements that brought it in.
 """
 
 from __future__ import annotations
@@ -17,6 +21,7 @@ import stat
 from dataclasses import dataclass, field, replace
 from pathlib import Path, PurePosixPath
 
+from mtt import files
 from mtt.language.diagnostics import (
     Diagnostic,
     Inclusion,
@@ -26,9 +31,10 @@ from mtt.language.diagnostics import (
     Source,
     error,
 )
-from mtt.language.parse import MAX_BONDS, ParsedModel, SubsystemDecl, parse
+from mtt.language.parse import MAX_BONDS, ParsedModel, SubsystemDecl, begins_as_model, parse
+from mtt.resources import resource_dir
 
-MAX_FILE_BYTES = 1 << 20  # a model file of a megabyte is already absurd
+MAX_FILE_BYTES = files.MAX_MODEL_BYTES
 MAX_DEPTH = 32  # subsystems within subsystems
 MAX_INSTANCES = 10_000  # subsystem statements, counted with multiplicity
 
@@ -38,10 +44,7 @@ def read_source(path: str | Path) -> Source:
     errors too (kind `io`)."""
     name = str(path)
     try:
-        with open(path, "rb") as file:
-            data = file.read(MAX_FILE_BYTES + 1)
-        if len(data) > MAX_FILE_BYTES:
-            raise ValueError(f"larger than {MAX_FILE_BYTES} bytes (a limit)")
+        data = files.read_bytes(path, "a model file", MAX_FILE_BYTES)
         return Source(name, data.decode("utf-8-sig"))
     except (OSError, ValueError) as exc:  # UnicodeDecodeError is a ValueError
         problem = error("io", f"cannot read the file: {_reason(exc)}")
@@ -50,6 +53,21 @@ def read_source(path: str | Path) -> Source:
 
 def _reason(exc: Exception) -> str:
     return exc.strerror if isinstance(exc, OSError) and exc.strerror else str(exc)
+
+
+def _trees(model: Source, include: tuple[str, ...]) -> tuple[str, ...]:
+    """The directories subsystem files may come from (real paths): the model's own (the
+    working directory for a model given as text), mtt's shipped models, and `include`."""
+    home = os.path.dirname(model.name)
+    try:
+        shipped = [str(resource_dir("models"))]
+    except FileNotFoundError:
+        shipped = []
+    return tuple(os.path.realpath(d or ".") for d in (home, *shipped, *include))
+
+
+def _within(real: str, trees: tuple[str, ...]) -> bool:
+    return any(real.startswith(tree.rstrip(os.sep) + os.sep) for tree in trees)
 
 
 def relocate(position: Position | None, origin: Origin) -> Position | None:
@@ -84,7 +102,8 @@ class Instance:
 
 
 class _Loader:
-    def __init__(self):
+    def __init__(self, trees: tuple[str, ...]):
+        self.trees = trees
         self.problems: list[Diagnostic] = []
         self.files: dict[tuple[int, int], _Parsed | None] = {}  # by (device, inode)
         self.instances = 0
@@ -119,6 +138,7 @@ class _Loader:
         file = os.path.normpath(os.path.join(os.path.dirname(parent.origin.source.name), path))
         try:
             info = os.stat(file)
+            real = os.path.realpath(file)
         except (OSError, ValueError) as exc:
             self.fail("io", f"{label}: cannot read {file}: {_reason(exc)}", where)
             return None
@@ -126,6 +146,16 @@ class _Loader:
         if not stat.S_ISREG(info.st_mode) or info.st_size > MAX_FILE_BYTES:
             what = "is not a regular file" if not stat.S_ISREG(info.st_mode) else "is too large"
             self.fail("io", f"{label}: {file} {what}", where)
+            return None
+        if not _within(real, self.trees):
+            leads = "" if real == os.path.abspath(file) else f" (it leads to {real})"
+            self.fail(
+                "io",
+                f"{label}: {file} is outside the model's directory{leads}: subsystem files "
+                "are read from the model's directory tree and mtt's shipped parts only (pass "
+                "--include DIR, or include= in Python, to allow another directory)",
+                where,
+            )
             return None
         if identity in ancestors:
             self.fail(
@@ -178,6 +208,10 @@ class _Loader:
         try:
             return _Parsed(source, parse(source), ())
         except ModelError as exc:
+            if not begins_as_model(source):  # perhaps not a model at all: never quote it
+                message = f"{label}: {file} is not a model file (no 'model NAME' line first)"
+                self.fail("io", message, where)
+                return None
             return _Parsed(source, None, exc.diagnostics)
 
 
@@ -188,10 +222,13 @@ class _Parsed:
     problems: tuple[Diagnostic, ...]
 
 
-def load_tree(parsed: ParsedModel) -> tuple[Instance, list[Diagnostic]]:
-    """The model and every subsystem file it brings in, with the problems of reading them."""
+def load_tree(
+    parsed: ParsedModel, include: tuple[str, ...] = ()
+) -> tuple[Instance, list[Diagnostic]]:
+    """The model and every subsystem file it brings in, with the problems of reading them
+    (`include`: directories subsystem files may also come from)."""
     root = Instance("", parsed, Origin(parsed.source))
-    loader = _Loader()
+    loader = _Loader(_trees(parsed.source, include))
     loader.bonds = len(parsed.bonds)
     try:
         info = os.stat(parsed.source.name)

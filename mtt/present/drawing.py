@@ -29,7 +29,7 @@ from matplotlib.patches import Circle, FancyArrowPatch, FancyBboxPatch
 from matplotlib.path import Path as MplPath
 
 from mtt.derivation.causality import CausalBondGraph
-from mtt.estimator.codegen import write_atomic
+from mtt.files import write_atomic
 from mtt.language.bondgraph import BondGraph
 from mtt.language.components import Role
 from mtt.present.geometry import Box, Obstacles, pieces

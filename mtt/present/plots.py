@@ -16,7 +16,7 @@ import numpy as np
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 
-from mtt.estimator.codegen import write_atomic
+from mtt.files import write_atomic
 
 
 def _hat(name: str) -> str:
