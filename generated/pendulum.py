@@ -85,7 +85,8 @@ or a dict from name to pair)
     with_noise(y, snr_db, *, seed=0)  y plus white Gaussian noise at an SNR in dB
     filter_states(t, w, *, C=None, hold="linear")  s^i w / C(s) at the sample times
     filter_polynomial(C)            the filter C(s) for a given C (text such as "(1+s)^5")
-    read_csv(path, columns)         named columns of a CSV file, as float arrays
+    read_csv(path, columns)         named columns of a CSV file, as float arrays (streamed,
+                                    bounded: CSVError, a ValueError, names file and line)
     EstimationWarning               the category of the warnings a user can act on
 
 The method: P. J. Gawthrop, R. W. Jones and S. A. MacKenzie, "Identification of
@@ -102,6 +103,7 @@ import json
 import math
 import os
 import re
+import stat
 import sys
 import warnings
 from bisect import bisect_left, bisect_right
@@ -168,10 +170,18 @@ def _real(name: str, value) -> float:
     try:
         number = float(value)
     except (TypeError, ValueError):
-        raise ValueError(f"{name} must be a real number, not {value!r}") from None
+        raise ValueError(f"{name} must be a real number, not {_short(value)}") from None
+    except OverflowError:  # an int such as 10**400
+        raise ValueError(f"{name} is out of floating-point range: {_short(value)}") from None
     if not math.isfinite(number):
         raise ValueError(f"{name} must be finite, not {number}")
     return number
+
+
+def _short(value) -> str:
+    """A value as a message shows it: its repr, cut to a readable length."""
+    text = repr(value)
+    return text if len(text) <= 60 else text[:40] + "..." + text[-12:]
 
 
 def _positive(name: str, value, allow_zero: bool = False) -> float:
@@ -190,6 +200,7 @@ def _choice(name: str, value: str, choices: tuple[str, ...]) -> str:
 SCALAR = len(UNKNOWNS) == 1  # one unknown: k is a float; several: a vector in UNKNOWNS order
 DEFAULT_RANGE = 10.0  # several unknowns: each searched within this factor of the model's value
 MAX_SIGNAL = 1e150  # size of an input or output sample: sums of squares stay finite
+MAX_TIME = 1e15  # size of a time stamp: beyond, its rounding (8 eps of it) exceeds a unit
 
 
 def _point(name: str, value) -> float | np.ndarray:
@@ -201,19 +212,30 @@ def _point(name: str, value) -> float | np.ndarray:
     if SCALAR:
         if np.ndim(value) == 1 and len(value) == 1:
             value = value[0]
-        return _real(name, value)
+        return _bounded_point(name, _real(name, value))
     try:
         array = np.array(value, dtype=float)
-    except (TypeError, ValueError):
+    except (TypeError, ValueError, OverflowError):
         array = None
     if array is None or array.shape != (len(UNKNOWNS),):
         raise ValueError(
             f"{name} must give the {len(UNKNOWNS)} unknowns {', '.join(UNKNOWNS)} (a sequence in "
-            f"that order, or a dict by name), not {value!r}"
+            f"that order, or a dict by name), not {_short(value)}"
         )
     for i, number in enumerate(array):
-        _real(f"{name}[{i}] ({UNKNOWNS[i]})", number)
+        _bounded_point(f"{name}[{i}] ({UNKNOWNS[i]})", _real(f"{name}[{i}] ({UNKNOWNS[i]})", number))
     return array
+
+
+def _bounded_point(name: str, number: float) -> float:
+    """A value of an unknown within MAX_SIGNAL: the estimator squares it (the prior's
+    weight, the cost's curvature), so beyond it floating point overflows."""
+    if abs(number) > MAX_SIGNAL:
+        raise ValueError(
+            f"{name} = {number:g} is out of range: the unknowns must stay within {MAX_SIGNAL:g} "
+            "in size (their squares overflow floating point); give them in a unit nearer 1"
+        )
+    return number
 
 
 def _shown(k) -> str:
@@ -253,8 +275,8 @@ def _interval(name: str, pair) -> tuple[float, float]:
     """(lo, hi) with lo < hi, each finite or infinite."""
     try:
         lo, hi = (float(value) for value in pair)
-    except (TypeError, ValueError):
-        raise ValueError(f"{name} must be a pair (lo, hi) of numbers, not {pair!r}") from None
+    except (TypeError, ValueError, OverflowError):
+        raise ValueError(f"{name} must be a pair (lo, hi) of numbers, not {_short(pair)}") from None
     if math.isnan(lo) or math.isnan(hi) or not lo < hi:
         raise ValueError(f"{name} must be (lo, hi) with lo < hi, not ({lo}, {hi})")
     return lo, hi
@@ -344,6 +366,8 @@ def _array(name: str, value) -> np.ndarray:
         array = np.asarray(value, dtype=float)
     except (TypeError, ValueError):
         raise ValueError(f"{name} must be an array of real numbers") from None
+    except OverflowError:  # ints such as 10**400
+        raise ValueError(f"{name} holds a number out of floating-point range") from None
     if array.ndim == 0:
         array = array.reshape(1)
     if array.ndim != 1:
@@ -356,13 +380,20 @@ def _array(name: str, value) -> np.ndarray:
 
 def _bounded(name: str, array: np.ndarray) -> None:
     """A signal whose squares and products stay within floating point (1e300 in a CSV file
-    made fit's least squares fail inside LAPACK, "SVD did not converge")."""
-    if array.size and np.abs(array).max() > MAX_SIGNAL:
+    made fit's least squares fail inside LAPACK, "SVD did not converge"), or times whose
+    steps stay above their rounding (one time of 1e308 fed to a Tracker made it refuse
+    every later sample)."""
+    limit = MAX_TIME if name == "t" else MAX_SIGNAL
+    if array.size and np.abs(array).max() > limit:
         i = int(np.argmax(np.abs(array)))
-        raise ValueError(
-            f"{name}[{i}] is {array[i]:g}: signals must stay within {MAX_SIGNAL:g} in size "
-            "(their squares overflow floating point); scale them to units nearer 1"
+        why = (
+            "times must stay within 1e+15 in size (beyond, a time stamp's rounding exceeds a "
+            "unit of time); count time from the record's start, in the model's unit"
+            if name == "t"
+            else f"signals must stay within {limit:g} in size (their squares overflow floating "
+            "point); scale them to units nearer 1"
         )
+        raise ValueError(f"{name}[{i}] is {array[i]:g}: {why}")
 
 
 def _sample(t, u, y, after: float) -> tuple[float, float, float] | None:
@@ -371,8 +402,11 @@ def _sample(t, u, y, after: float) -> tuple[float, float, float] | None:
     explains."""
     if not all(isinstance(value, int | float) for value in (t, u, y)):
         return None
-    t, u, y = float(t), float(u), float(y)
-    if not (math.isfinite(t) and t > after and abs(u) <= MAX_SIGNAL and abs(y) <= MAX_SIGNAL):
+    try:
+        t, u, y = float(t), float(u), float(y)
+    except OverflowError:
+        return None
+    if not (abs(t) <= MAX_TIME and t > after and abs(u) <= MAX_SIGNAL and abs(y) <= MAX_SIGNAL):
         return None
     return t, u, y
 
@@ -384,11 +418,8 @@ def _signals(*named: tuple[str, object], minimum: int, after: float = -math.inf)
     `after` is the time of a sample already seen (a Tracker's last): t must follow it.
     """
     if minimum <= 1 and all(isinstance(value, int | float) for _, value in named):
-        arrays = [np.array([float(value)]) for _, value in named]  # one sample, quickly
+        arrays = [_array(name, value) for name, value in named]  # one sample
         for (name, _), array in zip(named, arrays, strict=True):
-            if not math.isfinite(array[0]):
-                raise ValueError(f"{name}[0] is {array[0]}: every value must be finite")
-        for (name, _), array in list(zip(named, arrays, strict=True))[1:]:
             _bounded(name, array)
         if not arrays[0][0] > after:
             raise ValueError(
@@ -397,7 +428,7 @@ def _signals(*named: tuple[str, object], minimum: int, after: float = -math.inf)
             )
         return arrays
     arrays = [_array(name, value) for name, value in named]
-    for (name, _), array in list(zip(named, arrays, strict=True))[1:]:
+    for (name, _), array in zip(named, arrays, strict=True):
         _bounded(name, array)
     lengths = [array.size for array in arrays]
     if len(set(lengths)) > 1:
@@ -425,7 +456,7 @@ def transfer_function(k, **known: float) -> tuple[np.ndarray, np.ndarray]:
     """(num, den) of G(s) at k, highest power of s first (scipy.signal's convention); k the
     unknown's value (several: a vector in the order of UNKNOWNS, or a dict by name)."""
     k = _point("k", k)
-    coefficients = theta(**known) @ _K(k)  # [a0..an, -b0..-bm]
+    coefficients = _coefficients("k", theta(**known), k)  # [a0..an, -b0..-bm]
     den = np.trim_zeros(coefficients[n::-1], "f")
     num = np.trim_zeros(-coefficients[:n:-1], "f")
     if den.size == 0:
@@ -640,6 +671,7 @@ TIME_RESOLUTION = 8 * np.finfo(float).eps  # relative precision of a time stamp
 BLOCK = 1 << 15  # samples per chunk of work: bounds the memory of long records
 
 
+MAX_FILTER_NESTING = 50  # parentheses in C(s) text (each level a recursion of the reader)
 MAX_FILTER_DEGREE = 24  # beyond, the roots of (1 + sT)^q are lost in rounding (spread eps^(1/q))
 _FILTER_TOKEN = re.compile(r"\s*(?:([0-9]+\.?[0-9]*(?:[eE][-+]?[0-9]+)?|\.[0-9]+(?:[eE][-+]?[0-9]+)?)|(\*\*|[-+*/^()])|(s))")
 
@@ -655,13 +687,21 @@ def _filter_text(text: str) -> np.ndarray:
         match = _FILTER_TOKEN.match(text, at)
         if not match:
             raise ValueError(
-                f"C(s) = {text!r}: cannot read {text[at:].strip()[:12]!r} at character {at + 1} "
+                f"C(s) = {_short(text)}: cannot read {text[at:].strip()[:12]!r} at character {at + 1} "
                 "(write a polynomial in s with numbers, + - * /, ^ and parentheses)"
             )
         number, operator, variable = match.groups()
         tokens.append(("number", float(number)) if number else (operator or variable, None))
         at = match.end()
     tokens.append(("end", None))
+    depth = level = 0
+    for kind, _ in tokens:  # each level of parentheses is a recursion of the reader below
+        level += (kind == "(") - (kind == ")")
+        depth = max(depth, level)
+    if depth > MAX_FILTER_NESTING:
+        raise ValueError(
+            f"C(s) = {_short(text)}: parentheses nested {depth} deep, more than {MAX_FILTER_NESTING}"
+        )
     position = 0
 
     def peek() -> str:
@@ -672,17 +712,17 @@ def _filter_text(text: str) -> np.ndarray:
         token = tokens[position]
         if kind is not None and token[0] != kind:
             found = "the end" if token[0] == "end" else repr(token[0] if token[1] is None else token[1])
-            raise ValueError(f"C(s) = {text!r}: expected {kind!r}, found {found}")
+            raise ValueError(f"C(s) = {_short(text)}: expected {kind!r}, found {found}")
         position += 1
         return token
 
     def checked(c: np.ndarray, *parts: np.ndarray) -> np.ndarray:
         """c, the product of parts, unless its coefficients left the floating-point range."""
         if not np.isfinite(c).all():
-            raise ValueError(f"C(s) = {text!r}: a coefficient overflows the floating-point range")
+            raise ValueError(f"C(s) = {_short(text)}: a coefficient overflows the floating-point range")
         if c.size < sum(part.size - 1 for part in parts) + 1 or (c[-1] == 0 and parts[0][-1]):
             raise ValueError(
-                f"C(s) = {text!r}: its leading coefficient underflows to 0 (the numbers are too "
+                f"C(s) = {_short(text)}: its leading coefficient underflows to 0 (the numbers are too "
                 "small or too large for floating point: change the time unit)"
             )
         return c
@@ -704,7 +744,7 @@ def _filter_text(text: str) -> np.ndarray:
             right = power()
             if operator == "/":
                 if right.size > 1 or right[0] == 0:
-                    raise ValueError(f"C(s) = {text!r}: divide only by a non-zero number")
+                    raise ValueError(f"C(s) = {_short(text)}: divide only by a non-zero number")
                 with np.errstate(over="ignore", under="ignore"):
                     c = checked(c / right[0], c)
             else:
@@ -719,7 +759,7 @@ def _filter_text(text: str) -> np.ndarray:
             exponent = take("number")[1]
             if not (math.isfinite(exponent) and exponent == int(exponent) <= MAX_FILTER_DEGREE):
                 raise ValueError(
-                    f"C(s) = {text!r}: the exponent {exponent:g} must be a whole number from 0 "
+                    f"C(s) = {_short(text)}: the exponent {exponent:g} must be a whole number from 0 "
                     f"to {MAX_FILTER_DEGREE}"
                 )
             result = np.ones(1)
@@ -742,7 +782,7 @@ def _filter_text(text: str) -> np.ndarray:
         if kind in ("+", "-"):
             return (1.0 if kind == "+" else -1.0) * atom()
         found = "the end" if kind == "end" else repr(kind)
-        raise ValueError(f"C(s) = {text!r}: expected a number, s or '(', found {found}")
+        raise ValueError(f"C(s) = {_short(text)}: expected a number, s or '(', found {found}")
 
     c = expression()
     if peek() != "end":
@@ -765,7 +805,7 @@ def filter_polynomial(C=None) -> np.ndarray:
         )
     if isinstance(C, str):
         c = _filter_text(C)[::-1]
-        name = f"C(s) = {C!r}"
+        name = f"C(s) = {_short(C)}"
     elif C is None or np.ndim(C) == 0:
         T = 1.0 if C is None else _positive("the filter time constant T", C)
         with np.errstate(over="ignore", under="ignore"):
@@ -1059,6 +1099,18 @@ def _K(k) -> np.ndarray:
     if SCALAR:
         return k ** np.arange(N + 1)
     return np.prod(k ** _EXPONENTS, -1)
+
+
+def _coefficients(name: str, Theta: np.ndarray, k) -> np.ndarray:
+    """theta(k) = Theta @ K(k), or a ValueError when a coefficient leaves floating point."""
+    with np.errstate(over="ignore", invalid="ignore"):
+        coefficients = Theta @ _K(k)
+    if not np.isfinite(coefficients).all():
+        raise ValueError(
+            f"{name} = {_shown(k)} is out of range: the transfer function's coefficients at it "
+            "overflow floating point; give the unknowns in a unit nearer 1"
+        )
+    return coefficients
 
 
 def _theta_slopes(Theta: np.ndarray, k) -> np.ndarray:
@@ -4731,11 +4783,28 @@ class Tracker:
 
     def update(self, t, u, y):
         """Take the next sample(s) (numbers, or equal-length arrays, after the last) and
-        return the current estimate k^ (several unknowns: a vector)."""
+        return the current estimate k^ (several unknowns: a vector).
+
+        Samples that are refused (a ValueError that says why: not after the last, not
+        finite, beyond floating point's range) leave the Tracker as it was: one bad sample
+        does not stop a stream."""
         run = self._run
         sample = _sample(t, u, y, after=run.t)  # one sample as numbers: the common case
-        if sample is None or not run._one(*sample):
-            run.advance(*_signals(("t", t), ("u", u), ("y", y), minimum=1, after=run.t))
+        if sample is None or not run._one(*sample):  # (_one changes nothing unless it succeeds)
+            arrays = _signals(("t", t), ("u", u), ("y", y), minimum=1, after=run.t)
+            kept = dict(vars(run), cache=dict(run.cache))
+            try:
+                run.advance(*arrays)
+                if not (np.isfinite(run.P).all() and math.isfinite(run.log_scale)
+                        and np.isfinite(run.khat).all()):  # fmt: skip
+                    raise ValueError(
+                        f"the samples from t = {arrays[0][0]:g} leave floating point's range in "
+                        "the estimator's sums: refused (are the times in the model's unit?)"
+                    )
+            except BaseException:
+                vars(run).clear()
+                vars(run).update(kept)
+                raise
         self._global = None
         return self.k
 
@@ -4781,9 +4850,164 @@ class Tracker:
         return None if run.informed >= run.t else float(run.informed)
 
 
+# Data files: CSV records, read as untrusted input -------------------------------------------
+
+MAX_CSV_BYTES = 1 << 30  # a CSV file: ten million samples of three numbers fit
+MAX_CSV_LINE = 1 << 16  # characters in one line (a row, or the header)
+_NUMBER = re.compile(r"[+-]?(?:[0-9]+\.?[0-9]*|\.[0-9]+)(?:[eE][+-]?[0-9]+)?")
+
+
+class CSVError(ValueError):
+    """A data file that cannot be read as a record: `path`, and `line` (from 1) when the
+    problem is at one line of it (the message starts with PATH:LINE); `kind` "io" when the
+    file cannot be read at all, "bad_data" for its content."""
+
+    def __init__(self, path, line: int | None, message: str, kind: str = "bad_data"):
+        super().__init__(f"{path}:{line}: {message}" if line else f"{path}: {message}")
+        self.path, self.line, self.kind = os.fspath(path), line, kind
+
+
+def _open_csv(path):
+    """A CSV file opened as UTF-8 text (a byte-order mark read as nothing), when it is a
+    regular file of at most MAX_CSV_BYTES: a directory, a pipe, a device or anything under
+    /proc, /sys or /dev would fail or never end."""
+    try:
+        name = os.fspath(path)
+        real = os.path.realpath(name)
+        if any(real == root or real.startswith(root + "/") for root in ("/proc", "/sys", "/dev")):
+            raise CSVError(path, None, f"a system file ({real}), not a CSV file", "io")
+        handle = os.open(name, os.O_RDONLY | getattr(os, "O_NONBLOCK", 0))
+    except OSError as error:
+        raise CSVError(path, None, error.strerror, "io") from None
+    except TypeError:
+        raise TypeError(f"path must be a file name, not {path!r}") from None
+    try:
+        info = os.fstat(handle)
+        if stat.S_ISDIR(info.st_mode):
+            raise CSVError(path, None, "a directory, not a CSV file", "io")
+        if not stat.S_ISREG(info.st_mode):
+            raise CSVError(path, None, "not a regular file (a pipe or a device)", "io")
+        if info.st_size > MAX_CSV_BYTES:
+            raise CSVError(path, None, f"larger than {MAX_CSV_BYTES} bytes (a limit)", "io")
+        os.set_blocking(handle, True)
+        return open(handle, encoding="utf-8-sig", newline="")
+    except BaseException:
+        os.close(handle)
+        raise
+
+
+def _csv_lines(file, path, commas: int | None = None):
+    """The file's lines, read one at a time, each at most MAX_CSV_LINE characters; with
+    `commas`, each must hold that many (else `_Irregular`: a row to look at closely)."""
+    number = 0
+    while True:
+        line = file.readline(MAX_CSV_LINE + 1)
+        if not line:
+            return
+        number += 1
+        if len(line) > MAX_CSV_LINE and line[-1] not in "\r\n":
+            raise CSVError(path, number, f"a line longer than {MAX_CSV_LINE} characters")
+        if commas is not None and line.count(",") != commas and line.strip():
+            raise _Irregular
+        yield line
+
+
+class _Irregular(Exception):
+    """A row the fast reader leaves to the checked one."""
+
+
+def read_csv(path, columns: tuple[str, ...] = ("t", "u", "y")) -> tuple[np.ndarray, ...]:
+    """The named columns of a CSV file with a header row, as float arrays, in that order.
+
+    A UTF-8 byte-order mark is read as nothing; every row must have the header's number of
+    values, and every value read must be a finite decimal number (no "1_0", "nan" or
+    "inf"). Anything else, a file that is not a regular file of at most MAX_CSV_BYTES, or a
+    line longer than MAX_CSV_LINE characters, is a CSVError (a ValueError) naming the
+    file, and the line where there is one. The file is read as a stream, a line at a time.
+    """
+    fast = _read_plain_csv(path, columns)
+    return fast if fast is not None else _read_csv_checked(path, columns)
+
+
+def _read_plain_csv(path, columns: tuple[str, ...]) -> tuple[np.ndarray, ...] | None:
+    """read_csv of a file with nothing to report, by numpy's parser (ten times faster than
+    the checked reader, the same values to the bit); None for anything else (the checked
+    reader then says what is wrong)."""
+    try:
+        with _open_csv(path) as file:
+            header = file.readline(MAX_CSV_LINE + 1)
+            if "\"" in header or "\r" in header.rstrip("\r\n") or len(header) > MAX_CSV_LINE:
+                return None
+            names = [name.strip() for name in header.rstrip("\r\n").split(",")]
+            if len(set(names)) < len(names) or not set(columns) <= set(names):
+                return None
+            with warnings.catch_warnings():
+                warnings.simplefilter("error")  # an empty file after the header warns
+                values = np.loadtxt(_csv_lines(file, path, commas=len(names) - 1), delimiter=",",
+                                    usecols=[names.index(c) for c in columns], ndmin=2,
+                                    comments=None, encoding=None)  # fmt: skip
+    except (OSError, ValueError, UnicodeDecodeError, UserWarning, _Irregular):
+        return None
+    if values.shape[0] == 0 or not np.isfinite(values).all():
+        return None  # (nan, inf and overflowing numbers are the checked reader's to name)
+    return tuple(np.ascontiguousarray(column) for column in values.T)
+
+
+def _read_csv_checked(path, columns: tuple[str, ...]) -> tuple[np.ndarray, ...]:
+    """read_csv, cell by cell: every problem named with its file, line and column."""
+    with _open_csv(path) as file:
+        try:
+            reader = csv.reader(_csv_lines(file, path))
+            rows = _csv_rows(reader, path, columns)
+        except UnicodeDecodeError as error:
+            raise CSVError(path, None, f"not UTF-8 text (byte {error.start}: {error.reason})") from None
+        except csv.Error as error:
+            raise CSVError(path, reader.line_num or None, f"not a CSV file: {error}") from None
+    if not rows:
+        raise CSVError(path, None, "no data: the file has a header row and nothing after it")
+    return tuple(np.array(rows).reshape(-1, len(columns)).T)
+
+
+def _csv_rows(reader, path, columns: tuple[str, ...]) -> list[list[float]]:
+    """The rows' values of `columns`, checked as they are read (blank rows skipped)."""
+    header, index, rows = None, None, []
+    for row in reader:
+        if not any(cell.strip() for cell in row):
+            continue
+        line = reader.line_num
+        if header is None:
+            header = [name.strip() for name in row]
+            repeated = sorted({name for name in header if header.count(name) > 1})
+            if repeated:
+                raise CSVError(path, line, f"the header names the column {repeated[0]!r} twice")
+            missing = [name for name in columns if name not in header]
+            if missing:
+                named = ", ".join(header)
+                raise CSVError(path, line, f"no column {missing[0]!r} (the header names {named})")
+            index = [header.index(name) for name in columns]
+            continue
+        if len(row) != len(header):
+            raise CSVError(
+                path, line, f"{len(row)} values where the header names {len(header)} columns"
+            )
+        values = []
+        for name, i in zip(columns, index, strict=True):
+            cell = row[i].strip()
+            if not _NUMBER.fullmatch(cell):
+                raise CSVError(path, line, f"column {name!r} holds {cell[:20]!r}, not a number")
+            value = float(cell)
+            if not math.isfinite(value):
+                raise CSVError(path, line, f"column {name!r}: {cell[:20]} is out of range")
+            values.append(value)
+        rows.append(values)
+    if header is None:
+        expected = ", ".join(columns)
+        raise CSVError(path, None, f"the file is empty; expected a header row naming {expected}")
+    return rows
+
+
 # From the command line: python THIS_FILE fit|estimate data.csv ... ------------------------------
 
-_NUMBER = re.compile(r"[+-]?(?:[0-9]+\.?[0-9]*|\.[0-9]+)(?:[eE][+-]?[0-9]+)?")
 # argparse takes "-1e-3", "-inf" or "-1:0" for an option (it knows only -1 and -.5 as
 # numbers): they are values here, as no option starts with a digit, ".", inf or nan
 _NEGATIVE_NUMBER = re.compile(r"-(?:\.?[0-9]|inf|nan)", re.IGNORECASE)
@@ -4795,77 +5019,6 @@ def _for_command_line(text: str) -> str:
     for python, option in _COMMAND_LINE_ADVICE:
         text = text.replace(python, option)
     return text
-
-
-def read_csv(path, columns: tuple[str, ...] = ("t", "u", "y")) -> tuple[np.ndarray, ...]:
-    """The named columns of a CSV file with a header row, as float arrays, in that order.
-
-    A UTF-8 byte-order mark is read as nothing; every value must be a finite decimal number
-    (no "1_0", "nan" or "inf"); any other content is a ValueError naming the file, its line
-    and the column.
-    """
-    fast = _read_plain_csv(path, columns)
-    return fast if fast is not None else _read_csv_checked(path, columns)
-
-
-def _read_plain_csv(path, columns: tuple[str, ...]) -> tuple[np.ndarray, ...] | None:
-    """read_csv of a file with nothing to report, by numpy's parser (ten times faster than
-    the checked reader, the same values to the bit); None for anything else (the checked
-    reader then says what is wrong)."""
-    try:
-        with open(path, encoding="utf-8-sig", newline="") as file:
-            header = file.readline()
-            if "\"" in header or "\r" in header.rstrip("\r\n"):
-                return None
-            names = [name.strip() for name in header.rstrip("\r\n").split(",")]
-            if len(set(names)) < len(names) or not set(columns) <= set(names):
-                return None
-            with warnings.catch_warnings():
-                warnings.simplefilter("error")  # an empty file after the header warns
-                values = np.loadtxt(file, delimiter=",", usecols=[names.index(c) for c in columns],
-                                    ndmin=2, comments=None, encoding=None)  # fmt: skip
-    except (OSError, ValueError, UnicodeDecodeError, UserWarning):
-        return None
-    if values.shape[0] == 0 or not np.isfinite(values).all():
-        return None  # (nan, inf and overflowing numbers are the checked reader's to name)
-    return tuple(np.ascontiguousarray(column) for column in values.T)
-
-
-def _read_csv_checked(path, columns: tuple[str, ...]) -> tuple[np.ndarray, ...]:
-    """read_csv, cell by cell: every problem named with its file, line and column."""
-    try:
-        with open(path, newline="", encoding="utf-8-sig") as file:
-            rows = [(line, row) for line, row in enumerate(csv.reader(file), start=1)
-                    if any(cell.strip() for cell in row)]  # fmt: skip
-    except UnicodeDecodeError as error:
-        raise ValueError(f"{path}: not UTF-8 text (byte {error.start}: {error.reason})") from None
-    except csv.Error as error:
-        raise ValueError(f"{path}: not a CSV file: {error}") from None
-    if not rows:
-        expected = ", ".join(columns)
-        raise ValueError(f"{path}: the file is empty; expected a header row naming {expected}")
-    header = [name.strip() for name in rows[0][1]]
-    repeated = sorted({name for name in header if header.count(name) > 1})
-    if repeated:
-        raise ValueError(f"{path}:{rows[0][0]}: the header names the column {repeated[0]!r} twice")
-    missing = [name for name in columns if name not in header]
-    if missing:
-        named = ", ".join(header)
-        raise ValueError(f"{path}:{rows[0][0]}: no column {missing[0]!r} (the header names {named})")
-    if len(rows) == 1:
-        raise ValueError(f"{path}: no data: the file has a header row and nothing after it")
-    index = [header.index(name) for name in columns]
-    values = np.empty((len(rows) - 1, len(columns)))
-    for row_number, (line, row) in enumerate(rows[1:]):
-        for j, (name, i) in enumerate(zip(columns, index, strict=True)):
-            cell = row[i].strip() if i < len(row) else None
-            if cell is None or not _NUMBER.fullmatch(cell):
-                found = f"has {len(row)} values" if cell is None else f"holds {cell[:20]!r}"
-                raise ValueError(f"{path}:{line}: column {name!r} {found}, not a number")
-            values[row_number, j] = float(cell)
-            if not math.isfinite(values[row_number, j]):
-                raise ValueError(f"{path}:{line}: column {name!r}: {cell} is out of range")
-    return tuple(values.T)
 
 
 def _assignment(text: str) -> tuple[str, float]:
@@ -5093,7 +5246,9 @@ def main(argv: list[str] | None = None) -> int:
         if isinstance(error, OSError) and error.filename:
             text = f"{error.filename}: {error.strerror}"
         if args.json:  # the record of `mtt fit/estimate --json` when they fail
-            record = dict(file=None, kind="usage", line=None, column=None, message=text,
+            data = isinstance(error, CSVError)
+            record = dict(file=error.path if data else None, kind=error.kind if data else "usage",
+                          line=error.line if data else None, column=None, message=text,
                           notes=[])  # fmt: skip
             print(json.dumps(dict(ok=False, model=MODEL, unknown=UNKNOWN, unknowns=list(UNKNOWNS),
                                   errors=[record])))  # fmt: skip

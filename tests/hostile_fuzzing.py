@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import random
 
-FUNCTIONS = ["log", "sqrt", "exp", "sin", "cos"]
+FUNCTIONS = ["log", "sqrt", "exp", "sin", "cos", "tan", "tanh", "atan", "abs", "sign", "sat"]
 LEAVES = ["3", "2", "1", "0.5", "-1", "-2", "pi", "1e300", "1e-300", "1e4000", "9" * 40]
 
 

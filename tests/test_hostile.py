@@ -162,6 +162,22 @@ def test_values_that_are_not_real_are_located(argument, column):
     assert "not a real number" in message and took < HANG
 
 
+@pytest.mark.parametrize(
+    ("argument", "kind"),
+    [
+        # abs, sign and sat of an irrational constant were an AttributeError (exit 3)
+        ("sqrt(sign(pi - 4))*c", "bad_value"),
+        ("log(abs(pi - 4) - 1)*c", "bad_value"),
+        ("sqrt(sat(pi - 4))*c", "bad_value"),
+        ("sqrt(atan(pi - 5))*c", "bad_value"),  # atan is not clipped to [-1, 1] like sin
+        ("log(tan(pi + 1))*c", "unsupported_constant"),
+    ],
+)
+def test_the_sign_of_a_function_of_a_constant_is_its_own(tmp_path, argument, kind):
+    problem, _ = failure(model(argument), tmp_path)
+    assert only(problem)[:2] == (kind, 4)
+
+
 # --- the byte order mark -----------------------------------------------------------------
 
 

@@ -31,7 +31,7 @@ from mtt.language.diagnostics import (
 from mtt.language.elements import Component, Parameter
 from mtt.language.expressions import Expression
 from mtt.language.flatten import Assembly, Bond, assemble
-from mtt.language.measures import check_values
+from mtt.language.model_values import check_values
 from mtt.language.parse import ParsedModel, PortDecl
 from mtt.language.subsystems import Instance, load_tree
 

@@ -66,16 +66,28 @@ def power(base: Interval | None, exponent: Interval | None) -> Interval | None:
     return None
 
 
+def _sat(x: float) -> float:
+    return x / math.sqrt(1 + x * x) if abs(x) < 1e150 else math.copysign(1.0, x)
+
+
 def function(name: str, a: Interval | None) -> Interval | None:
-    """name(x) for x in a: sqrt, log (of a positive interval), exp, sin, cos."""
+    """name(x) for x in a: the increasing functions (sqrt and log of a positive interval,
+    exp, tanh, atan, sat), sign, sin and cos, abs; None for the others (tan)."""
     if a is None:
         return None
     try:
-        if name in ("sqrt", "log", "exp"):
-            if name != "exp" and a[0] <= 0:
+        if name in ("sqrt", "log", "exp", "tanh", "atan", "sat"):
+            if name in ("sqrt", "log") and a[0] <= 0:
                 return None
-            f = getattr(math, name)
+            f = _sat if name == "sat" else getattr(math, name)
             return widened(f(a[0]), f(a[1]))
+        if name == "sign":  # exact: -1, 0 or 1 at each end
+            return tuple(float((x > 0) - (x < 0)) for x in a)
+        if name == "abs":
+            ends = (abs(a[0]), abs(a[1]))
+            return (0.0 if a[0] <= 0 <= a[1] else min(ends)), max(ends)
+        if name not in ("sin", "cos"):
+            return None
         centre, radius = (a[0] + a[1]) / 2, (a[1] - a[0]) / 2
         if not radius < 1:  # |sin'|, |cos'| <= 1
             return (-1.0, 1.0)

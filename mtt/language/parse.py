@@ -22,6 +22,7 @@ from mtt.language.diagnostics import Diagnostic, ModelError, Position, Source, e
 from mtt.language.expression_rules import MAX_DIGITS, ExpressionRules
 from mtt.language.expressions import LAPLACE, RESERVED, Expression, NameUse, SignalUse
 from mtt.language.relations import Relation, written
+from mtt.language.syntax_messages import syntax_message
 from mtt.resources import resource_dir
 
 if TYPE_CHECKING:
@@ -152,44 +153,6 @@ class ParsedModel:
 def _parser() -> lark.Lark:
     grammar = (resource_dir("grammars") / "bg.lark").read_text(encoding="utf-8")
     return lark.Lark(grammar, start=["line", "expression"], parser="lalr")
-
-
-def _describe_terminal(name: str, parser: lark.Lark) -> str:
-    named = {
-        "NAME": "a name",
-        "NUMBER": "a number",
-        "STRING": 'a "description"',
-        "COMPONENT": "a component TYPE:NAME",
-        "POW": "'^'",
-        "_NL": "end of line",
-        "$END": "end of file",
-    }
-    if name in named:
-        return named[name]
-    try:
-        return repr(parser.get_terminal(name).pattern.value)
-    except KeyError:
-        return name
-
-
-def _syntax_message(exc: lark.exceptions.UnexpectedInput, parser: lark.Lark) -> str:
-    if isinstance(exc, lark.exceptions.UnexpectedCharacters):
-        return f"unexpected character {exc.char!r}"
-    if isinstance(exc, lark.exceptions.UnexpectedToken):
-        token = exc.token
-        found = (
-            _describe_terminal(token.type, parser)
-            if token.type in ("_NL", "$END")
-            else repr(str(token))
-        )
-        if "COMPONENT" in exc.expected and "MODEL" in exc.expected:
-            return (
-                f"unexpected {found}; a statement is model, param, unknown, input, output,"
-                " a component TYPE:NAME or a bond A -> B"
-            )
-        expected = sorted({_describe_terminal(t, parser) for t in exc.expected})
-        return f"unexpected {found}; expected {' or '.join(expected)}"
-    return "unexpected end of file"
 
 
 class _ToModel(ExpressionRules):
@@ -323,7 +286,7 @@ def _statements(source: Source) -> tuple[list, list[Diagnostic]]:
             tree = parser.parse(line + "\n", start="line")
         except lark.exceptions.UnexpectedInput as exc:
             column = exc.column if exc.line > 0 else len(line) + 1
-            message = _syntax_message(exc, parser)
+            message = syntax_message(exc, parser)
             bracketed = _BRACKETED_PORT.search(line)
             if bracketed:  # MTT's own syntax for a port
                 column = bracketed.start() + 1
@@ -412,9 +375,7 @@ def parse_expression(text: str, variables: frozenset[str] = frozenset({LAPLACE})
         tree = parser.parse(text, start="expression")
     except lark.exceptions.UnexpectedInput as exc:
         position = Position(exc.line, exc.column) if exc.line > 0 else None
-        raise ModelError(
-            source, [error("syntax", _syntax_message(exc, parser), position)]
-        ) from None
+        raise ModelError(source, [error("syntax", syntax_message(exc, parser), position)]) from None
     partial = _ToModel(problems).transform(tree)
     for use in partial.names:
         if use.name not in variables:
