@@ -94,6 +94,18 @@ def test_the_api_never_compiles_over_the_model(work):
     assert (work / "x.py").read_text() == "kept"
 
 
+def test_a_nonlinear_models_simulator_is_never_written_over_it(tmp_path, capsys, monkeypatch):
+    # compile without --at writes the simulator: the same check as for an estimator
+    monkeypatch.chdir(tmp_path)
+    shutil.copy(mtt.example("two_tanks"), "t.bg")
+    before = snapshot(tmp_path)
+    status, _, err = run(capsys, "compile", "t.bg", "-o", "t.bg")
+    assert status == 2 and "read by this command as a model file" in err
+    with pytest.raises(mtt.MttError, match="would replace it"):
+        mtt.load("t.bg").compile("t.bg")
+    assert snapshot(tmp_path) == before
+
+
 # --- what a model may read ------------------------------------------------------------------
 
 

@@ -135,7 +135,7 @@ def _compile_simulator(args, graph, choice) -> int:
     system, values = pipeline.state_equations_for(graph, choice)
     source = nonlinear_codegen.render(system, values=values, description=graph.description)
     path = nonlinear_codegen.output_path(args.path, system)
-    codegen.write_atomic(path, source)
+    files.write_atomic(path, source)
     unknowns = [symbol.name for symbol in system.unknowns]
     states = [symbol.name for symbol in system.states]
     if args.json:
