@@ -20,6 +20,7 @@ __all__ = [
     "StateSpace",
     "Theta",
     "TransferFunction",
+    "TransferMatrix",
     "example",
     "load",
 ]

@@ -149,7 +149,11 @@ def oracle_tf(
     keep: Iterable[str] = (),
     symbolic: bool = False,
     overrides: Mapping[str, sympy.Expr] | None = None,
+    input: str | None = None,
+    output: str | None = None,
 ) -> sympy.Expr:
-    """The transfer function of the model file at `path`, derived independently of mtt."""
-    graph = load(path, Selection(None if unknown is None else (unknown,)))
+    """The transfer function of the model file at `path`, derived independently of mtt
+    (from `input` to `output`, TYPE:NAME, over the file's: an entry of a transfer matrix,
+    the other sources set to zero)."""
+    graph = load(path, Selection(None if unknown is None else (unknown,), input, output))
     return transfer(graph, parameter_values(graph, keep, symbolic, overrides))

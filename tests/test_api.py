@@ -258,7 +258,7 @@ def test_model_errors_are_mtt_errors_located_at_the_first_error():
         ({"unknowns": "x"}, "undeclared_parameter", "x"),
         ({"keep": 3}, "bad_value", "keep takes parameter names, not 3"),
         ({"input": 3}, "bad_value", "input takes a component TYPE:NAME, not 3"),
-        ({"output": ["De:vc"]}, "bad_value", "output takes a component TYPE:NAME"),
+        ({"output": ["De:vc", 3]}, "bad_value", "output takes a component TYPE:NAME"),
         ({"set": "r=2"}, "bad_value", "set takes a dict {name: value}, not 'r=2'"),
     ],
 )

@@ -9,6 +9,7 @@ import pytest
 
 import mtt
 import mtt.api.loading
+import mtt.api.matrix
 import mtt.api.model
 import mtt.api.results
 
@@ -16,9 +17,10 @@ ROOT = Path(__file__).resolve().parent.parent
 OPTIONS = doctest.ELLIPSIS | doctest.NORMALIZE_WHITESPACE
 
 
-@pytest.mark.parametrize(
-    "module", [mtt, mtt.api.loading, mtt.api.model, mtt.api.results], ids=lambda m: m.__name__
-)
+MODULES = [mtt, mtt.api.loading, mtt.api.matrix, mtt.api.model, mtt.api.results]
+
+
+@pytest.mark.parametrize("module", MODULES, ids=lambda m: m.__name__)
 def test_docstring_examples(module):
     results = doctest.testmod(module, optionflags=OPTIONS)
     assert results.attempted > 0

@@ -4,6 +4,7 @@ See docs/api.md. Everything here is also `mtt.NAME`.
 """
 
 from mtt.api.loading import example, load
+from mtt.api.matrix import TransferMatrix
 from mtt.api.model import Model
 from mtt.api.results import Causality, StateSpace, Theta, TransferFunction
 from mtt.derivation.identifiability import Identifiability
@@ -17,6 +18,7 @@ __all__ = [
     "StateSpace",
     "Theta",
     "TransferFunction",
+    "TransferMatrix",
     "example",
     "load",
 ]

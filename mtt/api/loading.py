@@ -53,18 +53,25 @@ def _names(option: str, value: str | Iterable[str] | None) -> tuple[str, ...]:
     return tuple(name.strip() for name in names if name.strip())
 
 
-def _component(option: str, value: object) -> str | None:
+def _component(option: str, value: object) -> str | tuple[str, ...] | None:
+    """TYPE:NAME, or several (a list, or "Se:v,Se:tl")."""
     if value is None or isinstance(value, str):
         return value
-    raise MttError(f"{option} takes a component TYPE:NAME, not {value!r}", kind="bad_value")
+    chosen = tuple(value) if isinstance(value, Iterable) else None
+    if chosen and all(isinstance(name, str) for name in chosen):
+        return chosen
+    raise MttError(
+        f"{option} takes a component TYPE:NAME, not {value!r} (several: a list of them)",
+        kind="bad_value",
+    )
 
 
 def load(
     path_or_text: str | Path,
     *,
     unknowns: str | Iterable[str] | None = None,
-    input: str | None = None,
-    output: str | None = None,
+    input: str | Iterable[str] | None = None,
+    output: str | Iterable[str] | None = None,
     set: Mapping[str, object] | None = None,
     keep: str | Iterable[str] | None = None,
     max_terms: int | None = None,
@@ -78,7 +85,7 @@ def load(
     unknowns: the parameters to identify, instead of those the model declares `unknown`
         (names, or "a,b"); with several, the estimator's k is a vector in that order.
     input, output: the source and the detector (TYPE:NAME), over the model's `input` and
-        `output` statements.
+        `output` statements; several (a list, or "Se:v,Se:tl") for a transfer matrix.
     set: values replacing the file's, {name: number or exact expression text}.
     keep: parameters kept symbolic instead of substituted (names, or "a,b").
     max_terms: the most terms a polynomial of the derivation may have (default 20000);

@@ -15,6 +15,7 @@ from mtt import files
 from mtt.api import systems
 from mtt.api.exact import exact, exact_point
 from mtt.api.fits import Fit
+from mtt.api.matrix import TransferMatrix
 from mtt.api.results import Causality, StateSpace, SteadyStates, Theta, TransferFunction
 from mtt.data import records
 from mtt.data.records import Record
@@ -23,10 +24,11 @@ from mtt.derivation import theta as derived
 from mtt.derivation.causality import assign
 from mtt.derivation.equations import Equations
 from mtt.derivation.equilibria import equilibria
-from mtt.derivation.identifiability import Identifiability, identifiability
+from mtt.derivation.identifiability import Identifiability, identifiability, matrix_identifiability
 from mtt.derivation.nonlinear import nonlinear_parts
 from mtt.derivation.parameters import ParameterChoice
 from mtt.derivation.transfer import transfer_function
+from mtt.derivation.transfer_matrix import transfer_matrix
 from mtt.estimator import codegen, nonlinear_codegen
 from mtt.language.bondgraph import BondGraph
 from mtt.language.diagnostics import MttError, Source
@@ -76,12 +78,22 @@ class Model:
         return self.bondgraph.unknowns
 
     @property
+    def inputs(self) -> tuple[str, ...]:
+        """The sources driven, TYPE:NAME (several: a transfer matrix)."""
+        return tuple(self.bondgraph.component(n).label for n in self.bondgraph.inputs)
+
+    @property
+    def outputs(self) -> tuple[str, ...]:
+        return tuple(self.bondgraph.component(n).label for n in self.bondgraph.outputs)
+
+    @property
     def input(self) -> str:
-        return self.bondgraph.component(self.bondgraph.input).label
+        """TYPE:NAME (several separated by commas)."""
+        return ",".join(self.inputs)
 
     @property
     def output(self) -> str:
-        return self.bondgraph.component(self.bondgraph.output).label
+        return ",".join(self.outputs)
 
     @property
     def parameters(self) -> dict[str, object]:
@@ -141,6 +153,12 @@ class Model:
         return Model(self.bondgraph, choice)
 
     @cached_property
+    def transfer_matrix(self) -> TransferMatrix:
+        """G(s) = B(s) / A(s) from every input to every output (also of one input and one
+        output: a 1x1 matrix over the characteristic polynomial)."""
+        return TransferMatrix(transfer_matrix(self._equations))
+
+    @cached_property
     def _theta(self) -> derived.Theta:
         return derived.theta_matrix(transfer_function(self._equations))
 
@@ -175,6 +193,8 @@ class Model:
         >>> found.verdict, found.combinations
         ('none', (jl + jm,))
         """
+        if self.bondgraph.several:  # from every entry, and what fewer signals determine
+            return matrix_identifiability(self.transfer_matrix.matrix)
         return identifiability(self._checked_theta())
 
     def to_scipy(

@@ -47,9 +47,11 @@ def cmd_identifiability(args) -> int:
     from mtt.present.identifiability import identifiability_json, identifiability_text
 
     equations = loading.equations(args, identify=True)
-    theta = theta_matrix(transfer_function(equations))
-    if not theta.unknowns:
+    if not equations.parametrisation.unknowns:
         raise ModelError(equations.causal.bondgraph.source, [NO_UNKNOWN])
+    if equations.several:
+        return _matrix(args, equations)
+    theta = theta_matrix(transfer_function(equations))
     result = identifiability(theta)
     if args.json:
         print(json.dumps(identifiability_json(theta, result)))
@@ -58,25 +60,52 @@ def cmd_identifiability(args) -> int:
     return EXIT_OK
 
 
+def _matrix(args, equations) -> int:
+    """Identifiability from every entry of a transfer matrix, and from fewer signals."""
+    from mtt.derivation.identifiability import matrix_identifiability
+    from mtt.derivation.transfer_matrix import transfer_matrix
+    from mtt.present.identifiability import matrix_json, matrix_text
+
+    matrix = transfer_matrix(equations)
+    result = matrix_identifiability(matrix)
+    if args.json:
+        print(json.dumps(matrix_json(matrix, result)))
+    else:
+        print(matrix_text(matrix, result))
+    return EXIT_OK
+
+
 def warnings(graph: BondGraph, choice: ParameterChoice) -> list[Diagnostic]:
     """The `not_identifiable` warning of a model whose unknowns are not globally
     identifiable; nothing when it has none or its transfer function cannot be derived
     (the commands that derive it report why)."""
-    from mtt.derivation.identifiability import identifiability, warning_for
+    from mtt.derivation.identifiability import (
+        identifiability,
+        matrix_identifiability,
+        warning_for,
+    )
     from mtt.derivation.pipeline import equations_for
     from mtt.derivation.theta import theta_matrix
     from mtt.derivation.transfer import transfer_function
+    from mtt.derivation.transfer_matrix import transfer_matrix
     from mtt.language.diagnostics import Origin
 
     if not graph.unknowns:
         return []
     try:
-        theta = theta_matrix(transfer_function(equations_for(graph, choice, identify=True)))
+        equations = equations_for(graph, choice, identify=True)
+        if equations.several:
+            matrix = transfer_matrix(equations)
+        else:
+            theta = theta_matrix(transfer_function(equations))
     except MttError:
         return []
     positions = {name: p.position for name, p in graph.parameters.items()}
     try:
-        found = warning_for(identifiability(theta), positions)
+        found = warning_for(
+            matrix_identifiability(matrix, parts=False) if equations.several else identifiability(theta),
+            positions,
+        )
     except MttError:  # undecidable here (mtt identifiability says why)
         return []
     if found is None:

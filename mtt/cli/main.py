@@ -116,7 +116,13 @@ def cmd_check(args) -> int:
             continue
         unknowns = graph.unknowns
         unknown = f", unknown{'s' * (len(unknowns) > 1)} {', '.join(unknowns)}" if unknowns else ""
-        ends = f"input {record['input']}, output {record['output']}"
+        from mtt.present.summary import signals_text
+
+        several = lambda names: "s" * (len(names) > 1)  # noqa: E731
+        ends = (
+            f"input{several(graph.inputs)} {signals_text(graph, graph.inputs)}, "
+            f"output{several(graph.outputs)} {signals_text(graph, graph.outputs)}"
+        )
         if graph.open_ports:
             ends = f"ports {', '.join(graph.open_ports)}"
         kind = "part" if graph.open_ports else "model"
@@ -193,17 +199,46 @@ def _derived(args, text, latex) -> int:
     from mtt.present import report
 
     equations = loading.equations(args, identify=args.command == "theta")
+    causal = equations.causal
+    storage = [c for c in causal.bondgraph.components if c.type.role is Role.STORAGE]
+    order = len(storage) - len(causal.dependent)
+    if equations.several:
+        return _derived_matrix(args, equations, order)
     theta = theta_matrix(transfer_function(equations))
     if args.command == "theta":
         if not theta.unknowns:
             raise ModelError(equations.causal.bondgraph.source, [NO_UNKNOWN])
         refuse_cancelled(theta)
     if args.json:
-        causal = equations.causal
-        storage = [c for c in causal.bondgraph.components if c.type.role is Role.STORAGE]
-        _print_json(report.derived_json(theta, order=len(storage) - len(causal.dependent)))
+        _print_json(report.derived_json(theta, order=order))
     else:
         print(latex(theta) if args.latex else text(theta))
+    return EXIT_OK
+
+
+def _derived_matrix(args, equations, order: int) -> int:
+    """`mtt tf` and `mtt theta` with several inputs or outputs: the transfer matrix."""
+    from mtt.derivation.pipeline import NO_UNKNOWN
+    from mtt.derivation.theta import refuse_cancelled
+    from mtt.derivation.transfer_matrix import transfer_matrix
+    from mtt.present import matrix as present
+
+    matrix = transfer_matrix(equations)
+    if args.command == "tf":
+        record = lambda: present.matrix_json(matrix, order)  # noqa: E731
+        shown = present.matrix_latex if args.latex else present.matrix_text
+        printed = lambda: shown(matrix)  # noqa: E731
+    else:
+        thetas = matrix.thetas
+        if not equations.parametrisation.unknowns:
+            raise ModelError(equations.causal.bondgraph.source, [NO_UNKNOWN])
+        refuse_cancelled(*thetas.values())
+        record = lambda: present.thetas_json(matrix, thetas, order)  # noqa: E731
+        if args.latex:
+            printed = lambda: present.thetas_latex(thetas)  # noqa: E731
+        else:
+            printed = lambda: present.thetas_text(matrix, thetas)  # noqa: E731
+    _print_json(record()) if args.json else print(printed())
     return EXIT_OK
 
 

@@ -72,10 +72,14 @@ def _point(text: str) -> list[tuple[str, object]]:
     return values
 
 
-def _component(text: str) -> str:
-    kind, colon, name = text.partition(":")
-    if not (colon and kind and _is_name(name)):
-        raise argparse.ArgumentTypeError(f"expected TYPE:NAME, not {text!r}")
+def _components(text: str) -> str:
+    """TYPE:NAME, or several separated by commas (several inputs or outputs)."""
+    for part in text.split(","):
+        kind, colon, name = part.strip().partition(":")
+        if not (colon and kind and _is_name(name)):
+            raise argparse.ArgumentTypeError(
+                f"expected TYPE:NAME, not {text!r} (several: TYPE:NAME,TYPE:NAME)"
+            )
     return text
 
 
@@ -102,9 +106,10 @@ def add_selection_options(parser: argparse.ArgumentParser) -> None:
         group.add_argument(
             f"--{role}",
             metavar="TYPE:NAME",
-            type=_component,
+            type=_components,
             help=f"the {what} to use as the {role}, over the file's '{role}' statement "
-            f"(e.g. {example})",
+            f"(e.g. {example}); several {what}s, separated by commas, for several "
+            f"{role}s",
         )
     group.add_argument(
         "--time-limit",

@@ -134,6 +134,8 @@ def cmd_bode(args) -> int:
             + ("" if len(unknowns) == 1 else " with --unknown NAME, or --set NAME=VALUE"),
             kind="missing_value",
         )
+    if model.bondgraph.several:
+        return _bode_matrix(args, model, points)
     systems, labels = [], []
     for point in points:
         num, den = model.transfer_function.at(**point)
@@ -167,6 +169,50 @@ def cmd_bode(args) -> int:
         print(
             f"wrote {args.out}: Bode diagram of {model.name} at {'; '.join(lb for lb, _ in labels)}"
         )
+    return EXIT_OK
+
+
+def _bode_matrix(args, model, points: list[dict]) -> int:
+    """`mtt bode` with several inputs or outputs: a matrix of diagrams, one per entry."""
+    from mtt.present import bode
+
+    matrix, unknowns = model.transfer_matrix, model.unknowns
+    labels = []
+    for point in points:
+        values = {name: float(point.get(name, model.parameters[name])) for name in unknowns}
+        k = list(values.values())
+        label = ", ".join(f"{name} = {value:g}" for name, value in values.items())
+        labels.append((label or model.name, k[0] if len(k) == 1 else k or None))
+    entries = {}
+    for i, j in ((i, j) for i in range(len(model.outputs)) for j in range(len(model.inputs))):
+        entry = matrix.entry(i, j)
+        systems = [(float("nan"), *entry.at(**point)) for point in points]
+        if all(num.any() for _, num, _ in systems):  # a zero has no magnitude in dB
+            entries[i, j] = systems
+    if not entries:
+        raise MttError("every entry of G(s) is zero: there is no Bode diagram", kind="bad_value")
+    try:
+        data = bode.bode_matrix(entries, model.inputs, model.outputs)
+    except ValueError as exc:
+        raise MttError(str(exc), kind="out_of_range") from None
+    if args.out:
+        title = (f"{model.name}: Bode diagrams from {', '.join(model.inputs)} to "
+                 f"{', '.join(model.outputs)}")  # fmt: skip
+        figure = bode.matrix_figure(data, labels=[label for label, _ in labels], title=title)
+        _save(figure, args.out, args.dpi)
+    if args.json:
+        _print_json(
+            {"ok": True, "file": args.file, "out": args.out, "model": model.name,
+             "unknown": unknowns[0] if len(unknowns) == 1 else None,
+             "unknowns": list(unknowns), "k": [k for _, k in labels],
+             "inputs": list(model.inputs), "outputs": list(model.outputs),
+             "frequency": data.frequency.tolist(), "magnitude_db": _finite(data.magnitude_db),
+             "phase_deg": _finite(data.phase_deg)}
+        )  # fmt: skip
+    else:
+        rows, columns = matrix.shape
+        print(f"wrote {args.out}: {rows}x{columns} Bode diagrams of {model.name} at "
+              f"{'; '.join(label for label, _ in labels)}")  # fmt: skip
     return EXIT_OK
 
 

@@ -8,7 +8,9 @@ derivatives of the dependent (derivative-causality) ones; the strongly connected
 pieces of that dependency graph are the algebraic loops, solved exactly together.
 The result is E x' = A x + B u, y = C x + D u with x the energy variables (q of C,
 p of I), all exact, with coefficients in the field of rational functions of the
-unknown and the kept symbols.
+unknown and the kept symbols. With several inputs u1, u2, ... (sources) and outputs y1,
+y2, ... (detectors), B and D have a column per input, C and D a row per output; one input
+and one output are u and y.
 """
 
 from __future__ import annotations
@@ -30,7 +32,7 @@ from mtt.language.bondgraph import Component
 from mtt.language.components import ComponentType, PortVariables, Role
 from mtt.language.diagnostics import Diagnostic, ModelError, error
 
-INPUT, OUTPUT = "u", "y"
+INPUT, OUTPUT = "u", "y"  # the letters of the inputs' and outputs' variables
 
 
 @dataclass(frozen=True)
@@ -47,10 +49,42 @@ class Equations:
     D: DomainMatrix
     budget: Budget = DEFAULT_BUDGET  # how large the transfer stage may let polynomials grow
     notes: tuple[Diagnostic, ...] = ()  # warnings about how they were made (linearisation)
+    inputs: tuple[str, ...] = ()  # the sources driven, one per column of B and D
+    outputs: tuple[str, ...] = ()  # the detectors read, one per row of C and D
+
+    def __post_init__(self) -> None:
+        graph = self.causal.bondgraph
+        if not self.inputs:
+            object.__setattr__(self, "inputs", graph.inputs)
+        if not self.outputs:
+            object.__setattr__(self, "outputs", graph.outputs)
+
+    @property
+    def several(self) -> bool:
+        """Several inputs or outputs: a transfer matrix (see `channel`)."""
+        return len(self.inputs) > 1 or len(self.outputs) > 1
+
+    def channel(self, output: int, input: int) -> Equations:
+        """The same equations from one input to one output (the other inputs at zero)."""
+        return replace(
+            self,
+            B=self.B[:, input : input + 1],
+            C=self.C[output : output + 1, :],
+            D=self.D[output : output + 1, input : input + 1],
+            inputs=(self.inputs[input],),
+            outputs=(self.outputs[output],),
+        )
 
     def matrices(self) -> dict[str, sympy.Matrix]:
         """E, A, B, C, D as exact sympy matrices."""
         return {name: getattr(self, name).to_Matrix() for name in "EABCD"}
+
+
+def signal_names(names: tuple[str, ...], letter: str) -> dict[str, str]:
+    """Each input's (output's) variable: u (y) for one, u1, u2, ... (y1, ...) for several."""
+    if len(names) == 1:
+        return {names[0]: letter}
+    return {name: f"{letter}{i}" for i, name in enumerate(names, 1)}
 
 
 def _energy(component: Component) -> str:
@@ -134,8 +168,8 @@ def _port_variables(
         parameter=value,
         energy=_energy(component) if storage else None,
         rate="d" + _energy(component) if storage else None,
-        drive=INPUT if component.name == graph.input else None,
-        measure=OUTPUT if component.name == graph.output else None,
+        drive=signal_names(graph.inputs, INPUT).get(component.name),
+        measure=signal_names(graph.outputs, OUTPUT).get(component.name),
         signals=signals,
     )
 
@@ -244,22 +278,25 @@ def _to_sympy(K: Domain, c) -> sympy.Expr:
 def _descriptor(
     causal, parametrisation, K, storage, resolved, relations, extra, constraints
 ) -> Equations:
+    graph = causal.bondgraph
+    inputs = {u: j for j, u in enumerate(signal_names(graph.inputs, INPUT).values())}
+    outputs = list(signal_names(graph.outputs, OUTPUT).values())
     states = [_energy(c) for c in storage]
     rates = {"d" + x: i for i, x in enumerate(states)}
-    output = resolved.get(OUTPUT, {})
-    auxiliary = [w for w in rates if w in output]  # y depends on a dependent state's rate
+    read = [resolved.get(y, {}) for y in outputs]
+    auxiliary = [w for w in rates if any(w in form for form in read)]  # a dependent rate
     names = states + auxiliary + extra
     index = {x: i for i, x in enumerate(states)}
     index.update((z, len(states) + len(auxiliary) + j) for j, z in enumerate(extra))
     size = len(names)
     E = [[K.zero] * size for _ in range(size)]
     A = [[K.zero] * size for _ in range(size)]
-    B = [[K.zero] for _ in range(size)]
+    B = [[K.zero] * len(inputs) for _ in range(size)]
 
     def place(row: int, form: Form, sign) -> None:
         for w, c in form.items():
-            if w == INPUT:
-                B[row][0] += sign * c
+            if w in inputs:
+                B[row][inputs[w]] += sign * c
             elif w in index:
                 A[row][index[w]] += sign * c
             elif w in rates:
@@ -279,15 +316,16 @@ def _descriptor(
         A[row][row] += K.one
     for j, form in enumerate(constraints):  # 0 = form
         place(len(states) + len(auxiliary) + j, form, K.one)
-    C = [[K.zero] * size]
-    D = [[K.zero]]
-    for w, c in output.items():
-        if w == INPUT:
-            D[0][0] += c
-        elif w in index:
-            C[0][index[w]] += c
-        else:
-            C[0][len(states) + auxiliary.index(w)] += c
+    C = [[K.zero] * size for _ in outputs]
+    D = [[K.zero] * len(inputs) for _ in outputs]
+    for i, form in enumerate(read):
+        for w, c in form.items():
+            if w in inputs:
+                D[i][inputs[w]] += c
+            elif w in index:
+                C[i][index[w]] += c
+            else:
+                C[i][len(states) + auxiliary.index(w)] += c
     matrix = lambda rows, cols: DomainMatrix(rows, (len(rows), cols), K)  # noqa: E731
     return Equations(
         causal=causal,
@@ -297,7 +335,9 @@ def _descriptor(
         states=tuple(names),
         E=matrix(E, size),
         A=matrix(A, size),
-        B=matrix(B, 1),
+        B=matrix(B, len(inputs)),
         C=matrix(C, size),
-        D=matrix(D, 1),
+        D=matrix(D, len(inputs)),
+        inputs=graph.inputs,
+        outputs=graph.outputs,
     )

@@ -39,23 +39,34 @@ SEED = 20240611  # pseudo-random choices are the same at every run
 
 @dataclass(frozen=True)
 class System:
-    """Theta's coefficient polynomials theta_i(k), and symbols for the true values k*."""
+    """Theta's coefficient polynomials theta_i(k), and symbols for the true values k*. With
+    several channels (a transfer matrix), each channel's coefficients are a group: the
+    data determine the ratios within each group."""
 
     xs: tuple[sympy.Symbol, ...]  # the unknowns k
     ys: tuple[sympy.Dummy, ...]  # their true values k*
     symbols: tuple[sympy.Symbol, ...]  # the parameters kept symbolic: generic constants
-    coefficients: tuple[sympy.Expr, ...]  # the rows of theta(k) that are not identically 0
+    groups: tuple[tuple[sympy.Expr, ...], ...]  # per channel: rows of theta(k) not 0
 
     @classmethod
-    def of(cls, theta: Theta) -> System:
+    def of(cls, *thetas: Theta) -> System:
+        theta = thetas[0]
         xs = tuple(sympy.Symbol(name) for name in theta.unknowns)
-        column = theta.matrix * theta.K(dict(zip(theta.unknowns, xs, strict=True)))
+        values = dict(zip(theta.unknowns, xs, strict=True))
         return cls(
             xs=xs,
             ys=tuple(sympy.Dummy(f"{name}_true") for name in theta.unknowns),
             symbols=tuple(sympy.Symbol(name) for name in theta.symbols),
-            coefficients=tuple(e for e in (sympy.expand(c) for c in column) if e != 0),
+            groups=tuple(
+                tuple(e for e in (sympy.expand(c) for c in t.matrix * t.K(values)) if e != 0)
+                for t in thetas
+            ),
         )
+
+    @property
+    def coefficients(self) -> tuple[sympy.Expr, ...]:
+        """Every channel's coefficients."""
+        return tuple(c for group in self.groups for c in group)
 
     @property
     def identity(self) -> dict[str, sympy.Expr]:
@@ -69,14 +80,18 @@ class System:
         return bool(expression.free_symbols & set(self.xs))
 
     def ratios(self) -> list[Fraction]:
-        """theta_i / theta_r for every i != r, r the row with the fewest terms (a constant
-        one when there is one): they generate what the data determine."""
-        rows = self.coefficients
-        r = min(
-            range(len(rows)),
-            key=lambda i: (self.depends(rows[i]), len(sympy.Add.make_args(rows[i]))),
-        )
-        return [sympy.fraction(sympy.cancel(rows[i] / rows[r])) for i in range(len(rows)) if i != r]
+        """theta_i / theta_r for every i != r in each group, r the row with the fewest
+        terms (a constant one when there is one): they generate what the data determine."""
+        found = []
+        for rows in self.groups:
+            r = min(
+                range(len(rows)),
+                key=lambda i: (self.depends(rows[i]), len(sympy.Add.make_args(rows[i]))),
+            )
+            found += [
+                sympy.fraction(sympy.cancel(rows[i] / rows[r])) for i in range(len(rows)) if i != r
+            ]
+        return found
 
     def generic(self) -> Fibre:
         """The fibre of the ratios through symbolic true values."""
@@ -263,11 +278,11 @@ def _candidates(system: System) -> list[tuple[sympy.Expr, bool]]:
         for h in (a * b, a / b, b / a, a + b):
             found[h] = False
     found |= dict.fromkeys(system.xs, False)
-    rows = system.coefficients
-    for i, j in combinations(range(len(rows)), 2):
-        h = _normal(rows[i] / rows[j], system)
-        if h is not None:
-            found[h] = True
+    for rows in system.groups:
+        for i, j in combinations(range(len(rows)), 2):
+            h = _normal(rows[i] / rows[j], system)
+            if h is not None:
+                found[h] = True
     return sorted(found.items(), key=lambda item: _complexity(item[0]))
 
 

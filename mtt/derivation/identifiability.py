@@ -23,15 +23,17 @@ from __future__ import annotations
 
 import random
 from collections import Counter
-from collections.abc import Iterator
-from dataclasses import dataclass
+from collections.abc import Iterator, Mapping
+from dataclasses import dataclass, replace
+from itertools import combinations
 
 import sympy
 from sympy.polys.domains import QQ
 from sympy.polys.matrices import DomainMatrix
 
 from mtt.derivation import fields
-from mtt.derivation.theta import Theta
+from mtt.derivation.theta import Theta, refuse_cancelled
+from mtt.derivation.transfer_matrix import TransferMatrix
 from mtt.language.diagnostics import Diagnostic, MttError, warning
 
 Point = dict[str, sympy.Expr]  # a value per unknown
@@ -50,6 +52,14 @@ class Identifiability:
     maps: tuple[Point, ...] = ()  # local: the solutions that are rational in the true values
     point: Point | None = None  # local: true values (the model's, if generic) ...
     points: tuple[Point, ...] = ()  # ... and every solution for them, the true values first
+    parts: tuple[Signals, ...] = ()  # of a transfer matrix: what fewer signals determine
+
+    @property
+    def needed(self) -> tuple[Signals, ...]:
+        """Of a transfer matrix: the smallest sets of signals that determine as much as all
+        of them (none within another); empty when only all of them do."""
+        enough = [part for part in self.parts if part.determines_as_much(self)]
+        return tuple(p for p in enough if not any(q is not p and q.within(p) for q in enough))
 
     def __repr__(self) -> str:
         counted = f", solutions={self.solutions}" if self.verdict == "local" else ""
@@ -66,10 +76,12 @@ class Identifiability:
         return sum(all(v.is_positive for v in p.values()) for p in self.points)
 
 
-def identifiability(theta: Theta) -> Identifiability:
-    """The structural identifiability of Theta's unknowns (see the module docstring)."""
+def identifiability(theta: Theta, *others: Theta) -> Identifiability:
+    """The structural identifiability of Theta's unknowns (see the module docstring); with
+    `others`, the Thetas of the other channels of a transfer matrix: of the unknowns from
+    every entry together."""
     names = sympy.symbols([*theta.unknowns, *theta.symbols])
-    for entry in theta.matrix:
+    for entry in (e for t in (theta, *others) for e in t.matrix):
         if not entry.is_rational_function(*names):
             raise MttError(
                 f"a coefficient of the transfer function, {sympy.sstr(entry)[:60]}, is not a "
@@ -77,7 +89,7 @@ def identifiability(theta: Theta) -> Identifiability:
                 "parameters values (--set NAME=VALUE) to decide identifiability",
                 kind="unsupported_theta",
             )
-    system = fields.System.of(theta)
+    system = fields.System.of(theta, *others)
     unknowns = theta.unknowns
     rank = _rank(system)
     values = _random_values(theta, seed=fields.SEED, height=10**4)
@@ -98,9 +110,82 @@ def identifiability(theta: Theta) -> Identifiability:
     )  # fmt: skip
 
 
+@dataclass(frozen=True)
+class Signals:
+    """A part of a transfer matrix (the entries from some of its inputs to some of its
+    outputs) and what it determines."""
+
+    inputs: tuple[str, ...]  # labels, Se:v
+    outputs: tuple[str, ...]
+    result: Identifiability
+
+    def determines_as_much(self, whole: Identifiability) -> bool:
+        """Whether these signals determine what the whole matrix does: the same rank, the
+        same unknowns on their own and as many solutions."""
+        mine = self.result
+        return (mine.rank, set(mine.identified), mine.solutions) == (
+            whole.rank, set(whole.identified), whole.solutions,
+        )  # fmt: skip
+
+    def within(self, other: Signals) -> bool:
+        return set(self.inputs) <= set(other.inputs) and set(self.outputs) <= set(other.outputs)
+
+
+MAX_PARTS = 48  # beyond, only each output alone and each input alone (with all the others)
+
+
+def by_signals(
+    thetas: Mapping[tuple[int, int], Theta], inputs: tuple[str, ...], outputs: tuple[str, ...]
+) -> tuple[Signals, ...]:
+    """What each part of a transfer matrix smaller than the whole determines, the parts
+    with fewest signals first: some outputs and some inputs, every entry between them
+    (`thetas` by (output, input): a zero entry has none). A part whose entries are all zero
+    is left out; with many signals, only single outputs and single inputs."""
+
+    def subsets(count: int) -> list[tuple[int, ...]]:
+        return [c for size in range(1, count + 1) for c in combinations(range(count), size)]
+
+    rows, columns = subsets(len(outputs)), subsets(len(inputs))
+    whole = (tuple(range(len(outputs))), tuple(range(len(inputs))))
+    parts = [(o, i) for o in rows for i in columns if (o, i) != whole]
+    if len(parts) > MAX_PARTS:
+        parts = [(o, whole[1]) for o in rows if len(o) == 1]
+        parts += [(whole[0], i) for i in columns if len(i) == 1]
+    found = []
+    for rows_, columns_ in sorted(parts, key=lambda part: (len(part[0]) + len(part[1]), part)):
+        chosen = [thetas[i, j] for i in rows_ for j in columns_ if (i, j) in thetas]
+        if chosen:
+            found.append(
+                Signals(
+                    tuple(inputs[j] for j in columns_),
+                    tuple(outputs[i] for i in rows_),
+                    identifiability(*chosen),
+                )
+            )
+    return tuple(found)
+
+
+def matrix_identifiability(matrix: TransferMatrix, parts: bool = True) -> Identifiability:
+    """The identifiability of the unknowns from every entry of a transfer matrix, with
+    (`parts`) what fewer signals determine (`parts`, `needed`)."""
+    thetas = matrix.thetas
+    refuse_cancelled(*thetas.values())
+    whole = identifiability(*thetas.values())
+    if not parts:
+        return whole
+    return replace(whole, parts=by_signals(thetas, matrix.inputs, matrix.outputs))
+
+
 def _rank(system: fields.System) -> int:
-    """The generic rank of the Jacobian of k -> [theta(k)], exact over Q(k, symbols)."""
-    rows = [[c, *(sympy.diff(c, x) for x in system.xs)] for c in system.coefficients]
+    """The generic rank of the Jacobian of k -> [theta(k)], exact over Q(k, symbols): with
+    several channels, of k -> ([theta_1(k)], [theta_2(k)], ...), each up to its own factor:
+    rank [diag(theta_1, theta_2, ...), dtheta/dk] less the number of channels."""
+    groups = system.groups
+    rows = [
+        [*(c if h == g else 0 for h in range(len(groups))), *(sympy.diff(c, x) for x in system.xs)]
+        for g, group in enumerate(groups)
+        for c in group
+    ]
     if not rows:
         return 0
     field = QQ.frac_field(*system.xs, *system.symbols)
@@ -113,7 +198,7 @@ def _rank(system: fields.System) -> int:
             "constant as a decimal to decide it",
             kind="unsupported_theta",
         ) from None
-    return DomainMatrix(entries, (len(rows), len(rows[0])), field).rank() - 1
+    return DomainMatrix(entries, (len(rows), len(rows[0])), field).rank() - len(groups)
 
 
 def _identified(fibre: fields.Fibre) -> tuple[str, ...]:

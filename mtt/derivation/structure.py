@@ -18,7 +18,15 @@ from mtt.language.bondgraph import BondGraph, Component
 from mtt.language.components import Role
 from mtt.language.diagnostics import Diagnostic, ModelError, error
 
-INPUT, OUTPUT = ("u",), ("y",)
+
+def _u(name: str) -> tuple:
+    """The input variable a source imposes."""
+    return ("u", name)
+
+
+def _y(name: str) -> tuple:
+    """The output variable a detector reads."""
+    return ("y", name)
 
 
 def _received(causal: CausalBondGraph, name: str) -> list[tuple]:
@@ -44,11 +52,11 @@ def _arrows(causal: CausalBondGraph, component: Component) -> list[tuple[tuple, 
     imposed, received = _imposed(causal, name), _received(causal, name)
     read = _read(graph, component)
     if role is Role.SOURCE:
-        sources = [INPUT] if name == graph.input else []
+        sources = [_u(name)] if name in graph.inputs else []
     elif role is Role.MODULATED:
         sources = read
     elif role is Role.DETECTOR:  # imposes a zero; the output reads the other variable
-        return [(v, OUTPUT) for v in received] if name == graph.output else []
+        return [(v, _y(name)) for v in received] if name in graph.outputs else []
     elif role is Role.STORAGE:  # the state and its rate, both ways (integral or derivative)
         state = [("x", name), ("dx", name)]
         return [(a, b) for a in received + state for b in imposed + state if a != b]
@@ -175,15 +183,16 @@ def _unreachable(graph: BondGraph, source: Component, output: Component) -> str:
 
 
 def structure_problems(causal: CausalBondGraph) -> list[Diagnostic]:
-    """An output the input cannot reach, and unknowns that cannot reach the output."""
+    """An output the inputs cannot reach (an input that reaches no output), and unknowns
+    that cannot reach an output."""
     graph = causal.bondgraph
     forward, backward = signal_flow(causal)
-    reached = _reached(forward, INPUT)
-    output = graph.component(graph.output)
-    source = graph.component(graph.input)
-    if OUTPUT not in reached:
-        return [error("unreachable_output", _unreachable(graph, source, output), output.position)]
-    on_path = reached & (_reached(backward, OUTPUT) | {OUTPUT})
+    reached = {u: _reached(forward, _u(u)) for u in graph.inputs}
+    back = {y: _reached(backward, _y(y)) | {_y(y)} for y in graph.outputs}
+    problems = _unreached(graph, reached)
+    if problems:
+        return problems
+    on_path = set().union(*reached.values()) & set().union(*back.values())
     brought = _unknowns_in(graph)
     entering: set[str] = set()
     for component in graph.components:
@@ -192,14 +201,52 @@ def structure_problems(causal: CausalBondGraph) -> list[Diagnostic]:
     return [
         error(
             "no_dependence",
-            f"the unknown {name} does not enter the transfer function from "
-            f"{source.label} to {output.label}: no component between them depends on it, "
-            "so the data cannot tell its value",
+            f"the unknown {name} does not enter the transfer {_between(graph)}: no component "
+            "between them depends on it, so the data cannot tell its value",
             graph.parameters[name].position,
         )
         for name in graph.unknowns
         if name not in entering
     ]
+
+
+def _labels(graph: BondGraph, names: tuple[str, ...]) -> str:
+    return ", ".join(graph.component(name).label for name in names)
+
+
+def _between(graph: BondGraph) -> str:
+    """`function from Se:v to Df:w`, or `matrix from Se:v, Se:tl to Df:w, Df:i`."""
+    what = "matrix" if graph.several else "function"
+    return f"{what} from {_labels(graph, graph.inputs)} to {_labels(graph, graph.outputs)}"
+
+
+def _unreached(graph: BondGraph, reached: dict[str, set[tuple]]) -> list[Diagnostic]:
+    """Each output no input reaches; with several inputs, each input that reaches no output
+    (a row, or a column, of the transfer matrix zero whatever the parameters)."""
+    problems = []
+    for y in graph.outputs:
+        if any(_y(y) in found for found in reached.values()):
+            continue
+        output = graph.component(y)
+        if graph.several:
+            message = (
+                f"the output {output.label} depends on none of the inputs "
+                f"({_labels(graph, graph.inputs)}): no chain of bonds and signals leads from "
+                "one to it, whatever the parameters (its row of the transfer matrix is zero)"
+            )
+        else:
+            message = _unreachable(graph, graph.component(graph.inputs[0]), output)
+        problems.append(error("unreachable_output", message, output.position))
+    for u in graph.inputs if len(graph.inputs) > 1 else ():
+        if not any(_y(y) in reached[u] for y in graph.outputs):
+            source = graph.component(u)
+            message = (
+                f"the input {source.label} reaches none of the outputs "
+                f"({_labels(graph, graph.outputs)}): no chain of bonds and signals leads from "
+                "it to one, whatever the parameters (its column of the transfer matrix is zero)"
+            )
+            problems.append(error("unreachable_output", message, source.position))
+    return problems
 
 
 def causal_for(graph: BondGraph, identify: bool = False) -> CausalBondGraph:

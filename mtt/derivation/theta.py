@@ -97,20 +97,26 @@ class Theta:
         )
 
 
-def refuse_cancelled(theta: Theta) -> None:
-    """`no_dependence` at the declaration of each unknown that occurs in no column of Theta:
-    it reached the output (the structural check passed) but cancels out of the exact
-    transfer function (`R:a(k)` in series with `R:b(-k)`), so nothing could identify it."""
-    idle = [name for name, degree in theta.degrees.items() if degree == 0]
+def refuse_cancelled(theta: Theta, *others: Theta) -> None:
+    """`no_dependence` at the declaration of each unknown that occurs in no column of Theta
+    (of any channel's Theta, with `others`): it reached the output (the structural check
+    passed) but cancels out of the exact transfer function (`R:a(k)` in series with
+    `R:b(-k)`), so nothing could identify it."""
+    thetas = (theta, *others)
+    idle = [name for name in theta.unknowns if all(t.degrees[name] == 0 for t in thetas)]
+    what = (
+        "every entry of the exact transfer matrix"
+        if others
+        else f"the exact transfer function from {theta.input} to {theta.output}"
+    )
     if idle:
         raise ModelError(
             theta.source or Source(theta.source_name, ""),
             [
                 error(
                     "no_dependence",
-                    f"the unknown {name} cancels out of the exact transfer function from "
-                    f"{theta.input} to {theta.output}, so the data cannot tell its value; make "
-                    "it a known parameter (or choose the unknowns with --unknown)",
+                    f"the unknown {name} cancels out of {what}, so the data cannot tell its "
+                    "value; make it a known parameter (or choose the unknowns with --unknown)",
                     theta.declared.get(name),
                 )
                 for name in idle
@@ -157,13 +163,16 @@ def theta_matrix(tf: TransferFunction) -> Theta:
     if p <= 1:  # every power up to the degree
         occurring = {(j,) * p for j in range(max(sum(mono) for mono in occurring) + 1)}
     monomials = tuple(sorted(occurring, key=_column_order))
+    source, detector = (
+        graph.component(names[0]) for names in (equations.inputs, equations.outputs)
+    )
     matrix = sympy.Matrix([[row.get(j, sympy.Integer(0)) for j in monomials] for row in rows])
     return Theta(
         model=graph.name,
         description=graph.description,
         source_name=graph.source.name,
-        input=graph.component(graph.input).label,
-        output=graph.component(graph.output).label,
+        input=source.label,
+        output=detector.label,
         unknowns=params.unknowns,
         symbols=params.symbols,
         defaults=params.defaults,
@@ -175,8 +184,8 @@ def theta_matrix(tf: TransferFunction) -> Theta:
         m=m,
         monomials=monomials,
         matrix=matrix,
-        input_description=graph.component(graph.input).description,
-        output_description=graph.component(graph.output).description,
+        input_description=source.description,
+        output_description=detector.description,
         source=graph.source,
         name_position=graph.name_position,
         declared={name: parameter.position for name, parameter in graph.parameters.items()},

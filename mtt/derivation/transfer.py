@@ -119,6 +119,8 @@ def transfer_function(equations: Equations) -> TransferFunction:
 def _transfer_function(equations: Equations, meter: Meter) -> TransferFunction:
     from mtt.derivation import determinants as evaluation  # numpy
 
+    if equations.several:
+        raise several_signals(equations)
     F, gens = _field(equations)
     lift = _lifter(equations, F)
     D = lift(equations.D)[0, 0].element
@@ -159,6 +161,19 @@ def _transfer_function(equations: Equations, meter: Meter) -> TransferFunction:
     if digits > MAX_DIGITS:
         raise _too_large(equations, f"have {int(digits)}")
     return tf
+
+
+def several_signals(equations: Equations) -> ModelError:
+    """What is said where a step takes one input and one output and the model has more."""
+    graph = equations.causal.bondgraph
+    labels = lambda names: ", ".join(graph.component(n).label for n in names)  # noqa: E731
+    message = (
+        f"from {labels(equations.inputs)} to {labels(equations.outputs)}: several inputs or "
+        "outputs make a transfer matrix (mtt ss, tf, theta, identifiability and bode derive "
+        "it, and Model.transfer_matrix); this step takes one input and one output: choose "
+        "them with --input TYPE:NAME --output TYPE:NAME (input=, output= in mtt.load)"
+    )
+    return ModelError(graph.source, [error("several_signals", message)])
 
 
 def _digits(x: Fraction) -> float:

@@ -49,14 +49,26 @@ class Port:
     inward: bool
 
 
+Chosen = str | tuple[str, ...] | None  # TYPE:NAME, several as a tuple or "Se:v,Se:tl"
+
+
+def chosen_names(chosen: Chosen) -> tuple[str, ...]:
+    """The TYPE:NAMEs of an --input or --output choice, in order."""
+    if chosen is None:
+        return ()
+    names = chosen.split(",") if isinstance(chosen, str) else chosen
+    return tuple(name.strip() for name in names if name.strip())
+
+
 @dataclass(frozen=True)
 class Selection:
     """What the command line chooses over the file: the unknowns (in order), the input and
-    the output (TYPE:NAME), and the directories subsystem files may also come from."""
+    the output (TYPE:NAME; several sources for several inputs, several detectors for several
+    outputs), and the directories subsystem files may also come from."""
 
     unknowns: tuple[str, ...] | None = None  # None: the `unknown` declarations, in order
-    input: str | None = None
-    output: str | None = None
+    input: Chosen = None
+    output: Chosen = None
     include: tuple[str, ...] = ()  # --include DIR: beyond the model's tree and shipped parts
 
 
@@ -78,14 +90,26 @@ class BondGraph:
     named: MappingProxyType  # name -> Component, in model order
     bonds: tuple[Bond, ...]  # by number
     parameters: MappingProxyType  # name -> Parameter, in model order
-    input: str | None  # None only in a part (see `open_ports`)
-    output: str | None
+    input: str | None  # the (first) input; None only in a part (see `open_ports`)
+    output: str | None  # the (first) output
     unknowns: tuple[str, ...]  # the parameters to identify, in order
     warnings: tuple[Diagnostic, ...]
     subsystems: tuple[Subsystem, ...] = ()  # depth first, in file order
     port_bonds: MappingProxyType = field(default_factory=lambda: MappingProxyType({}))
     # each SS port -> the bond it joined
     name_position: Position | None = None  # the model's name in its `model` statement
+    inputs: tuple[str, ...] = ()  # every input, in the order chosen (input first)
+    outputs: tuple[str, ...] = ()  # every output, in the order chosen (output first)
+
+    def __post_init__(self) -> None:
+        for one, several in (("input", "inputs"), ("output", "outputs")):
+            if not getattr(self, several) and getattr(self, one) is not None:
+                object.__setattr__(self, several, (getattr(self, one),))
+
+    @property
+    def several(self) -> bool:
+        """Several inputs or several outputs: a transfer matrix, not a transfer function."""
+        return len(self.inputs) > 1 or len(self.outputs) > 1
 
     def component(self, name: str) -> Component:
         return self.named[name]
@@ -186,8 +210,8 @@ class _Whole:
             self.report("duplicate_name", f"the unknown {name!r} is chosen twice")
         return tuple(dict.fromkeys(n for n in chosen if n in parameters))
 
-    def choose_port(self, role: Role) -> str | None:
-        """The input (or output): the command line's choice, the model file's statement,
+    def choose_port(self, role: Role) -> tuple[str, ...]:
+        """The inputs (or outputs): the command line's choice, the model file's statement,
         or the only candidate (in any file: subsystems' sources and detectors count)."""
         kind, word = ("no_input", "input") if role is Role.SOURCE else ("no_output", "output")
         components = self.assembly.components
@@ -195,19 +219,20 @@ class _Whole:
         statements = [p for p in self.parsed.ports if p.role == word]
         for extra in statements[1:]:
             self.report("syntax", f"a second {word!r} statement", extra.position)
-        override = getattr(self.selection, word)
+        override = chosen_names(getattr(self.selection, word))
         if not self.complete:
-            return None
-        if override is not None:
-            type_, _, name = override.partition(":")
-            chosen = PortDecl(word, type_, name, None)
+            return ()
+        if override:
             how = f" (chosen with --{word})"
+            chosen = [PortDecl(word, *name.partition(":")[::2], None) for name in override]
+            for name in sorted({n for n in override if override.count(n) > 1}):
+                self.report("duplicate_name", f"the {word} {name} is chosen twice")
         elif statements:
-            chosen, how = statements[0], ""
+            chosen, how = statements[:1], ""
         elif len(candidates) == 1:
-            return candidates[0].name
+            return (candidates[0].name,)
         elif self.part:
-            return None
+            return ()
         else:
             what = "sources" if role is Role.SOURCE else "detectors"
             if not candidates:
@@ -217,10 +242,18 @@ class _Whole:
                 self.report(
                     kind,
                     f"several {what} ({names}): say which is the {word} with an "
-                    f"'{word} TYPE:NAME' statement or --{word} TYPE:NAME",
+                    f"'{word} TYPE:NAME' statement or --{word} TYPE:NAME (several: "
+                    f"--{word} TYPE:NAME,TYPE:NAME)",
                 )
-            return None
-        component = components.get(chosen.name)
+            return ()
+        found = [self._port(declaration, role, kind, how) for declaration in chosen]
+        if None in found:
+            return ()
+        return tuple(dict.fromkeys(found))
+
+    def _port(self, chosen: PortDecl, role: Role, kind: str, how: str) -> str | None:
+        """The component a statement or an option names, if it is a source (detector)."""
+        component = self.assembly.components.get(chosen.name)
         if component is None or component.type.name != chosen.type:
             actual = f" (it is {component.label})" if component else ""
             self.report(
@@ -287,8 +320,8 @@ def build(parsed: ParsedModel, selection: Selection | None = None, part: bool = 
     part = part and any(c.type.role is Role.PORT for c in checks[root.name].components.values())
     whole = _Whole(root, assembly, selection, part)
     unknowns = whole.unknowns()
-    input_name = whole.choose_port(Role.SOURCE)
-    output_name = whole.choose_port(Role.DETECTOR)
+    inputs = whole.choose_port(Role.SOURCE)
+    outputs = whole.choose_port(Role.DETECTOR)
     for check in checks.values():
         problems += check.problems
     problems += assembly.problems + whole.problems
@@ -305,8 +338,10 @@ def build(parsed: ParsedModel, selection: Selection | None = None, part: bool = 
         named=MappingProxyType(dict(assembly.components)),
         bonds=tuple(sorted(assembly.bonds, key=lambda b: b.number)),
         parameters=MappingProxyType(assembly.parameters),
-        input=input_name,
-        output=output_name,
+        input=inputs[0] if inputs else None,
+        output=outputs[0] if outputs else None,
+        inputs=inputs,
+        outputs=outputs,
         unknowns=unknowns,
         warnings=tuple(_once(warnings)),
         subsystems=tuple(

@@ -70,3 +70,62 @@ def figure(data: Bode, *, labels: Sequence[str], title: str) -> Figure:
     magnitude.legend(loc="best")
     magnitude.set_title(title, fontsize=10)
     return fig
+
+
+@dataclass(frozen=True)
+class BodeMatrix:
+    """The Bode data of every entry of a transfer matrix on one frequency grid."""
+
+    inputs: tuple[str, ...]  # labels, one per column
+    outputs: tuple[str, ...]  # one per row
+    frequency: np.ndarray  # rad/s
+    magnitude_db: np.ndarray  # (outputs, inputs, values, frequency): nan for a zero entry
+    phase_deg: np.ndarray
+
+
+def bode_matrix(
+    entries: dict[tuple[int, int], Sequence[tuple[float, np.ndarray, np.ndarray]]],
+    inputs: tuple[str, ...],
+    outputs: tuple[str, ...],
+) -> BodeMatrix:
+    """`bode` of every entry that is not zero ((k, num, den) at each point, by (output,
+    input)), all on one grid."""
+    found = bode([system for systems in entries.values() for system in systems])
+    count = len(next(iter(entries.values())))
+    shape = (len(outputs), len(inputs), count, found.frequency.size)
+    magnitude, phase = np.full(shape, np.nan), np.full(shape, np.nan)
+    for index, (i, j) in enumerate(entries):
+        rows = slice(index * count, (index + 1) * count)
+        magnitude[i, j], phase[i, j] = found.magnitude_db[rows], found.phase_deg[rows]
+    return BodeMatrix(inputs, outputs, found.frequency, magnitude, phase)
+
+
+def matrix_figure(data: BodeMatrix, *, labels: Sequence[str], title: str) -> Figure:
+    """A column per input, a magnitude and a phase row per output."""
+    rows, columns = len(data.outputs), len(data.inputs)
+    fig = Figure(figsize=(1.0 + 3.6 * columns, 0.8 + 3.2 * rows), layout="constrained")
+    FigureCanvasAgg(fig)
+    axes = fig.subplots(2 * rows, columns, sharex=True, squeeze=False)
+    for i, output in enumerate(data.outputs):
+        for j, input_ in enumerate(data.inputs):
+            magnitude, phase = axes[2 * i, j], axes[2 * i + 1, j]
+            if i == 0:
+                magnitude.set_title(f"from {input_}", fontsize=9)
+            if j == 0:
+                magnitude.set_ylabel(f"to {output}\nmagnitude [dB]", fontsize=8)
+                phase.set_ylabel("phase [deg]", fontsize=8)
+            if np.isnan(data.magnitude_db[i, j]).all():  # a zero entry
+                magnitude.text(0.5, 0.5, "G = 0", ha="center", va="center",
+                               transform=magnitude.transAxes)  # fmt: skip
+            for label, mag, ph in zip(labels, data.magnitude_db[i, j], data.phase_deg[i, j],
+                                      strict=True):  # fmt: skip
+                magnitude.semilogx(data.frequency, mag, label=label)
+                phase.semilogx(data.frequency, ph, label=label)
+            for ax in (magnitude, phase):
+                ax.grid(True, which="both", alpha=0.3)
+                ax.tick_params(labelsize=8)
+    for ax in axes[-1]:
+        ax.set_xlabel("angular frequency [rad/s]", fontsize=8)
+    next(ax for ax in axes.flat if ax.lines).legend(loc="best", fontsize=7)
+    fig.suptitle(title, fontsize=10)
+    return fig

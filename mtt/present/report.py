@@ -8,7 +8,7 @@ from collections.abc import Iterable
 import sympy
 
 from mtt.derivation.causality import CausalBondGraph
-from mtt.derivation.equations import Equations
+from mtt.derivation.equations import INPUT, OUTPUT, Equations, signal_names
 from mtt.derivation.theta import Theta
 from mtt.derivation.transfer import LAPLACE
 from mtt.language.bondgraph import BondGraph
@@ -19,7 +19,7 @@ def in_powers_of_s(expression: sympy.Expr) -> str:
     poly = sympy.Poly(expression, LAPLACE)
     terms = []
     for (power,), coefficient in poly.terms():
-        c = _factored(coefficient)  # each coefficient factored
+        c = factored(coefficient)  # each coefficient factored
         monomial = {0: "", 1: "s"}.get(power, f"s**{power}")
         if not monomial:
             terms.append(str(c))
@@ -28,11 +28,11 @@ def in_powers_of_s(expression: sympy.Expr) -> str:
         elif c == -1:
             terms.append(f"-{monomial}")
         else:
-            terms.append(f"{_grouped(c)}*{monomial}")
+            terms.append(f"{grouped(c)}*{monomial}")
     return " + ".join(terms).replace("+ -", "- ") or "0"
 
 
-def _factored(polynomial: sympy.Expr) -> sympy.Expr:
+def factored(polynomial: sympy.Expr) -> sympy.Expr:
     """The polynomial factored, when that is cheap: one of many terms or of huge numbers
     (sympy's multivariate factoring looks for primes of their size) only has its common
     factors taken out."""
@@ -104,19 +104,28 @@ def appearing(theta: Theta) -> list[str]:
     return [name for name in theta.symbols if name in held]
 
 
+def heading(model: str, source: str, target: str, unknowns, symbols) -> str:
+    """`model M: from Se:v to Df:w; unknown k; symbolic none` (sources and targets may
+    be several, separated by commas)."""
+    names = f"unknown{'s' * (len(unknowns) > 1)} {', '.join(unknowns) or 'none'}"
+    kept = ", ".join(symbols) or "none"
+    return f"model {model}: from {source} to {target}; {names}; symbolic {kept}"
+
+
 def _heading(theta: Theta) -> str:
-    symbols = ", ".join(appearing(theta)) or "none"
-    unknowns = f"unknown{'s' * (len(theta.unknowns) > 1)} {', '.join(theta.unknowns) or 'none'}"
-    return (
-        f"model {theta.model}: from {theta.input} to {theta.output}; {unknowns}; symbolic {symbols}"
-    )
+    return heading(theta.model, theta.input, theta.output, theta.unknowns, appearing(theta))
+
+
+def assumed_text(assumed) -> str:
+    """`values substituted: a = 1, b = 2` (empty when there are none)."""
+    if not assumed:
+        return ""
+    values = ", ".join(f"{name} = {value}" for name, value in assumed.items())
+    return f"values substituted: {values}"
 
 
 def _assumed(theta: Theta) -> str:
-    if not theta.assumed:
-        return ""
-    values = ", ".join(f"{name} = {value}" for name, value in theta.assumed.items())
-    return f"values substituted: {values}"
+    return assumed_text(theta.assumed)
 
 
 def _preamble(theta: Theta, written: Written) -> list[str]:
@@ -135,12 +144,12 @@ def tf_text(theta: Theta) -> str:
         f"  numerator   (m = {theta.m}):  {in_powers_of_s(num)}",
         f"  denominator (n = {theta.n}):  {in_powers_of_s(den)}",
         "",
-        f"  G(s) = {_grouped(_factored(num))} / ({_factored(den)})",
+        f"  G(s) = {grouped(factored(num))} / ({factored(den)})",
     ]
     return "\n".join(lines)
 
 
-def _grouped(expression: sympy.Expr) -> str:
+def grouped(expression: sympy.Expr) -> str:
     """The expression as text, in parentheses when it is a sum."""
     return f"({expression})" if isinstance(expression, sympy.Add) else str(expression)
 
@@ -222,12 +231,28 @@ def _written_equations(equations: Equations) -> Written:
     return Written(*(e for _, e in equations.relations), *matrices, *states)
 
 
+def _signals(equations: Equations) -> str:
+    """`u input, y output`, or with several `inputs u1 = Se:v, u2 = Se:tl; outputs ...`."""
+    if not equations.several:
+        return "u input, y output"
+    graph = equations.causal.bondgraph
+    return "; ".join(
+        f"{what} " + ", ".join(
+            f"{variable} = {graph.component(name).label}"
+            for name, variable in signal_names(names, letter).items()
+        )
+        for what, names, letter in (
+            ("inputs", equations.inputs, INPUT), ("outputs", equations.outputs, OUTPUT)
+        )
+    )  # fmt: skip
+
+
 def ss_text(equations: Equations) -> str:
     graph = equations.causal.bondgraph
     written = _written_equations(equations)
     lines = [
         f"model {graph.name}: causal equations (bond variables e<n>, f<n>; "
-        "u input, y output; d<x> is dx/dt)"
+        f"{_signals(equations)}; d<x> is dx/dt)"
     ]
     if written.note:
         lines.append(written.note)
@@ -240,6 +265,9 @@ def ss_text(equations: Equations) -> str:
         "descriptor form E x' = A x + B u, y = C x + D u",
         f"  x = [{', '.join(written.names.get(x, x) for x in equations.states)}]",
     ]
+    if equations.several:
+        for letter, names in ((INPUT, equations.inputs), (OUTPUT, equations.outputs)):
+            lines.append(f"  {letter} = [{', '.join(signal_names(names, letter).values())}]")
     for name, matrix in equations.matrices().items():
         lines += ["", f"{name} ="]
         pretty = sympy.pretty(written(matrix), use_unicode=False)
@@ -281,6 +309,8 @@ def show_json(graph: BondGraph) -> dict:
         ],  # fmt: skip
         "input": label(graph.input),
         "output": label(graph.output),
+        "inputs": [label(name) for name in graph.inputs],
+        "outputs": [label(name) for name in graph.outputs],
         "unknowns": list(graph.unknowns),
         "subsystems": [
             {
@@ -324,11 +354,14 @@ def ss_json(equations: Equations) -> dict:
         name: [[written.text(entry) for entry in matrix.row(i)] for i in range(matrix.rows)]
         for name, matrix in equations.matrices().items()
     }
+    label = lambda name: graph.component(name).label  # noqa: E731
     return {
         "ok": True,
         "model": graph.name,
-        "input": graph.component(graph.input).label,
-        "output": graph.component(graph.output).label,
+        "input": label(equations.inputs[0]),
+        "output": label(equations.outputs[0]),
+        "inputs": [label(name) for name in equations.inputs],
+        "outputs": [label(name) for name in equations.outputs],
         "unknowns": list(params.unknowns),
         "symbols": list(params.symbols),
         "names": written.table,

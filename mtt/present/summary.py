@@ -49,11 +49,18 @@ def check_record(
         record["parameters"] = {
             p.name: None if p.value is None else str(p.value) for p in graph.parameters.values()
         }
-        record["input"] = graph.component(graph.input).label if graph.input else None
-        record["output"] = graph.component(graph.output).label if graph.output else None
+        # several inputs (outputs): TYPE:NAME separated by commas, as --input takes them
+        record["input"] = ",".join(graph.component(n).label for n in graph.inputs) or None
+        record["output"] = ",".join(graph.component(n).label for n in graph.outputs) or None
         record["ports"] = list(graph.open_ports)  # a part's own, checked alone
         record["unknown"] = list(graph.unknowns)
     return record
+
+
+def signals_text(graph: BondGraph, names: tuple[str, ...]) -> str:
+    """`Se:v`, or `Se:v and Se:tl`, `Df:a, Df:b and Df:c`."""
+    labels = [graph.component(name).label for name in names] or ["none"]
+    return " and ".join(filter(None, (", ".join(labels[:-1]), labels[-1])))
 
 
 def describe(graph: BondGraph) -> str:
@@ -95,8 +102,8 @@ def describe(graph: BondGraph) -> str:
         lines += rows_text(rows)
     lines += [
         "",
-        f"input   {graph.component(graph.input).label}",
-        f"output  {graph.component(graph.output).label}",
+        f"input{'s' * (len(graph.inputs) > 1):3}{signals_text(graph, graph.inputs)}",
+        f"output{'s' * (len(graph.outputs) > 1):2}{signals_text(graph, graph.outputs)}",
         f"unknown {', '.join(graph.unknowns) or '(none)'}",
     ]
     return "\n".join(lines)
