@@ -102,10 +102,11 @@ def warnings(graph: BondGraph, choice: ParameterChoice) -> list[Diagnostic]:
         return []
     positions = {name: p.position for name, p in graph.parameters.items()}
     try:
-        found = warning_for(
-            matrix_identifiability(matrix, parts=False) if equations.several else identifiability(theta),
-            positions,
-        )
+        if equations.several:
+            result = matrix_identifiability(matrix, parts=False)
+        else:
+            result = identifiability(theta)
+        found = warning_for(result, positions)
     except MttError:  # undecidable here (mtt identifiability says why)
         return []
     if found is None:
