@@ -15,17 +15,28 @@ from mtt.derivation.transfer_matrix import TransferMatrix
 from mtt.present import report
 
 
-def _heading(matrix: TransferMatrix) -> list[str]:
+def _written(matrix: TransferMatrix) -> report.Written:
+    """The names of the matrix's expressions as sympy reads them back (`report`)."""
+    entries = [
+        e for row in matrix.entries for entry in row for e in (entry.numerator, entry.denominator)
+    ]
+    return report.Written(matrix.A, *matrix.B, *entries)
+
+
+def _heading(matrix: TransferMatrix, written: report.Written) -> list[str]:
     params = matrix.equations.parametrisation
     model = matrix.equations.causal.bondgraph.name
+    held = {x.name for x in matrix.A.free_symbols.union(*(b.free_symbols for b in matrix.B))}
     lines = [
         report.heading(
             model, ", ".join(matrix.inputs), ", ".join(matrix.outputs),
-            params.unknowns, params.symbols,
+            params.unknowns, [name for name in params.symbols if name in held],
         )
     ]  # fmt: skip
     if params.assumed:
         lines.append(report.assumed_text(params.assumed))
+    if written.note:
+        lines.append(written.note)
     return lines
 
 
@@ -36,26 +47,26 @@ def _channels(matrix: TransferMatrix):
             yield i, j, f"from {input_} to {output}"
 
 
-def _reduced(matrix: TransferMatrix, i: int, j: int) -> str | None:
+def _reduced(matrix: TransferMatrix, i: int, j: int, written: report.Written) -> str | None:
     """What reducing the entry cancels, and the reduced entry; None if nothing in s."""
     common = matrix.cancelled(i, j)
     if common is None:
         return None
     entry = matrix.entries[i][j]
-    num, den = (report.factored(p) for p in (entry.numerator, entry.denominator))
-    return (
-        f"reduced: the factor {sympy.factor(common)} cancels: G = {report.grouped(num)} / ({den})"
-    )
+    num, den = (report.factored(written(p)) for p in (entry.numerator, entry.denominator))
+    cancelled = sympy.factor(written(common))
+    return f"reduced: the factor {cancelled} cancels: G = {report.grouped(num)} / ({den})"
 
 
 def matrix_text(matrix: TransferMatrix) -> str:
     """`mtt tf` with several inputs or outputs."""
     rows, columns = matrix.shape
-    lines = _heading(matrix) + [
+    written = _written(matrix)
+    lines = _heading(matrix, written) + [
         "",
         f"  G(s) = B(s) / A(s): a {rows}x{columns} matrix of polynomials B over the common "
         "characteristic polynomial A",
-        f"  A (n = {matrix.n}):  {report.in_powers_of_s(matrix.A)}",
+        f"  A (n = {matrix.n}):  {report.in_powers_of_s(written(matrix.A))}",
         "",
     ]
     labels = list(_channels(matrix))
@@ -64,8 +75,9 @@ def matrix_text(matrix: TransferMatrix) -> str:
     for i, j, label in labels:
         b = matrix.B[i, j]
         degree = sympy.degree(b, LAPLACE) if b != 0 else 0
-        lines.append(f"  {label + ':':{width}}  B (m = {degree}):  {report.in_powers_of_s(b)}")
-        note = _reduced(matrix, i, j)
+        shown = report.in_powers_of_s(written(b))
+        lines.append(f"  {label + ':':{width}}  B (m = {degree}):  {shown}")
+        note = _reduced(matrix, i, j, written)
         if note:
             reduced += 1
             lines.append(f"      {note}")
@@ -87,6 +99,7 @@ def matrix_latex(matrix: TransferMatrix) -> str:
 def matrix_json(matrix: TransferMatrix, order: int) -> dict:
     """The `tf --json` record with several inputs or outputs."""
     params = matrix.equations.parametrisation
+    written = _written(matrix)
     entries = []
     for i, j, _ in _channels(matrix):
         entry, common = matrix.entries[i][j], matrix.cancelled(i, j)
@@ -94,12 +107,12 @@ def matrix_json(matrix: TransferMatrix, order: int) -> dict:
             {
                 "input": matrix.inputs[j],
                 "output": matrix.outputs[i],
-                "B": str(matrix.B[i, j]),
-                "num": str(entry.numerator),
-                "den": str(entry.denominator),
+                "B": written.text(matrix.B[i, j]),
+                "num": written.text(entry.numerator),
+                "den": written.text(entry.denominator),
                 "m": entry.degree("num"),
                 "n": entry.degree("den"),
-                "cancelled": None if common is None else str(sympy.factor(common)),
+                "cancelled": None if common is None else str(sympy.factor(written(common))),
             }
         )
     return {
@@ -109,9 +122,10 @@ def matrix_json(matrix: TransferMatrix, order: int) -> dict:
         "outputs": list(matrix.outputs),
         "unknowns": list(params.unknowns),
         "symbols": list(params.symbols),
-        "A": str(matrix.A),
+        "names": written.table,
+        "A": written.text(matrix.A),
         "n": matrix.n,
-        "B": [[str(b) for b in matrix.B.row(i)] for i in range(matrix.B.rows)],
+        "B": [[written.text(b) for b in matrix.B.row(i)] for i in range(matrix.B.rows)],
         "entries": entries,
         "order": order,
     }
