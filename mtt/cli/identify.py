@@ -39,39 +39,31 @@ def register(commands) -> None:
 
 
 def cmd_identifiability(args) -> int:
-    from mtt.derivation.identifiability import identifiability
+    from mtt.derivation.identifiability import identifiability, matrix_identifiability
     from mtt.derivation.pipeline import NO_UNKNOWN
     from mtt.derivation.theta import theta_matrix
     from mtt.derivation.transfer import transfer_function
+    from mtt.derivation.transfer_matrix import transfer_matrix
     from mtt.language.diagnostics import ModelError
-    from mtt.present.identifiability import identifiability_json, identifiability_text
+    from mtt.present.identifiability import (
+        identifiability_json,
+        identifiability_text,
+        matrix_json,
+        matrix_text,
+    )
 
     equations = loading.equations(args, identify=True)
     if not equations.parametrisation.unknowns:
         raise ModelError(equations.causal.bondgraph.source, [NO_UNKNOWN])
-    if equations.several:
-        return _matrix(args, equations)
-    theta = theta_matrix(transfer_function(equations))
-    result = identifiability(theta)
-    if args.json:
-        print(json.dumps(identifiability_json(theta, result)))
+    if equations.several:  # from every entry of the matrix, and from fewer signals
+        derived = transfer_matrix(equations)
+        result = matrix_identifiability(derived)
+        record, text = matrix_json, matrix_text
     else:
-        print(identifiability_text(theta, result))
-    return EXIT_OK
-
-
-def _matrix(args, equations) -> int:
-    """Identifiability from every entry of a transfer matrix, and from fewer signals."""
-    from mtt.derivation.identifiability import matrix_identifiability
-    from mtt.derivation.transfer_matrix import transfer_matrix
-    from mtt.present.identifiability import matrix_json, matrix_text
-
-    matrix = transfer_matrix(equations)
-    result = matrix_identifiability(matrix)
-    if args.json:
-        print(json.dumps(matrix_json(matrix, result)))
-    else:
-        print(matrix_text(matrix, result))
+        derived = theta_matrix(transfer_function(equations))
+        result = identifiability(derived)
+        record, text = identifiability_json, identifiability_text
+    print(json.dumps(record(derived, result)) if args.json else text(derived, result))
     return EXIT_OK
 
 

@@ -134,21 +134,16 @@ def cmd_bode(args) -> int:
             + ("" if len(unknowns) == 1 else " with --unknown NAME, or --set NAME=VALUE"),
             kind="missing_value",
         )
+    labels = [_point_label(model, point) for point in points]
     if model.bondgraph.several:
-        return _bode_matrix(args, model, points)
-    systems, labels = [], []
-    for point in points:
+        return _bode_matrix(args, model, points, labels)
+    systems = []
+    for point, (label, k) in zip(points, labels, strict=True):
         num, den = model.transfer_function.at(**point)
-        values = {name: point.get(name, model.parameters[name]) for name in unknowns}
-        label = ", ".join(f"{name} = {float(value):g}" for name, value in values.items())
         if not num.any():  # no magnitude in dB, no phase (scipy warns and gives -inf)
-            raise MttError(
-                f"G(s) is zero{' at ' + label if label else ''}: there is no Bode diagram",
-                kind="bad_value",
-            )
-        k = [float(values[name]) for name in unknowns]
-        systems.append((k[0] if len(k) == 1 else float("nan"), num, den))
-        labels.append((label or model.name, k[0] if len(k) == 1 else k or None))
+            at = f" at {label}" if unknowns else ""
+            raise MttError(f"G(s) is zero{at}: there is no Bode diagram", kind="bad_value")
+        systems.append((k if isinstance(k, float) else float("nan"), num, den))
     try:
         data = bode.bode(systems)
     except ValueError as exc:
@@ -158,13 +153,7 @@ def cmd_bode(args) -> int:
         figure = bode.figure(data, labels=[label for label, _ in labels], title=title)
         _save(figure, args.out, args.dpi)
     if args.json:
-        _print_json(
-            {"ok": True, "file": args.file, "out": args.out, "model": model.name,
-             "unknown": unknowns[0] if len(unknowns) == 1 else None,
-             "unknowns": list(unknowns), "k": [k for _, k in labels],
-             "frequency": data.frequency.tolist(), "magnitude_db": _finite(data.magnitude_db),
-             "phase_deg": _finite(data.phase_deg)}
-        )  # fmt: skip
+        _print_json(_bode_record(args, model, labels, data))
     elif args.out:
         print(
             f"wrote {args.out}: Bode diagram of {model.name} at {'; '.join(lb for lb, _ in labels)}"
@@ -172,17 +161,32 @@ def cmd_bode(args) -> int:
     return EXIT_OK
 
 
-def _bode_matrix(args, model, points: list[dict]) -> int:
+def _point_label(model, point: dict) -> tuple[str, object]:
+    """A point's label (`k = 5`, `ra = 1, jl = 10`; the model's name without unknown) and
+    its unknowns' values for --json (a number for one, a list for several, else null)."""
+    values = {name: float(point.get(name, model.parameters[name])) for name in model.unknowns}
+    label = ", ".join(f"{name} = {value:g}" for name, value in values.items())
+    k = list(values.values())
+    return label or model.name, k[0] if len(k) == 1 else k or None
+
+
+def _bode_record(args, model, labels: list, data, **more) -> dict:
+    """`mtt bode --json`: the curves' magnitudes and phases on one frequency grid."""
+    unknowns = model.unknowns
+    return {
+        "ok": True, "file": args.file, "out": args.out, "model": model.name,
+        "unknown": unknowns[0] if len(unknowns) == 1 else None,
+        "unknowns": list(unknowns), "k": [k for _, k in labels], **more,
+        "frequency": data.frequency.tolist(), "magnitude_db": _finite(data.magnitude_db),
+        "phase_deg": _finite(data.phase_deg),
+    }  # fmt: skip
+
+
+def _bode_matrix(args, model, points: list[dict], labels: list) -> int:
     """`mtt bode` with several inputs or outputs: a matrix of diagrams, one per entry."""
     from mtt.present import bode
 
-    matrix, unknowns = model.transfer_matrix, model.unknowns
-    labels = []
-    for point in points:
-        values = {name: float(point.get(name, model.parameters[name])) for name in unknowns}
-        k = list(values.values())
-        label = ", ".join(f"{name} = {value:g}" for name, value in values.items())
-        labels.append((label or model.name, k[0] if len(k) == 1 else k or None))
+    matrix = model.transfer_matrix
     entries = {}
     for i, j in ((i, j) for i in range(len(model.outputs)) for j in range(len(model.inputs))):
         entry = matrix.entry(i, j)
@@ -201,14 +205,8 @@ def _bode_matrix(args, model, points: list[dict]) -> int:
         figure = bode.matrix_figure(data, labels=[label for label, _ in labels], title=title)
         _save(figure, args.out, args.dpi)
     if args.json:
-        _print_json(
-            {"ok": True, "file": args.file, "out": args.out, "model": model.name,
-             "unknown": unknowns[0] if len(unknowns) == 1 else None,
-             "unknowns": list(unknowns), "k": [k for _, k in labels],
-             "inputs": list(model.inputs), "outputs": list(model.outputs),
-             "frequency": data.frequency.tolist(), "magnitude_db": _finite(data.magnitude_db),
-             "phase_deg": _finite(data.phase_deg)}
-        )  # fmt: skip
+        signals = {"inputs": list(model.inputs), "outputs": list(model.outputs)}
+        _print_json(_bode_record(args, model, labels, data, **signals))
     else:
         rows, columns = matrix.shape
         print(f"wrote {args.out}: {rows}x{columns} Bode diagrams of {model.name} at "

@@ -98,7 +98,6 @@ def matrix_latex(matrix: TransferMatrix) -> str:
 
 def matrix_json(matrix: TransferMatrix, order: int) -> dict:
     """The `tf --json` record with several inputs or outputs."""
-    params = matrix.equations.parametrisation
     written = _written(matrix)
     entries = []
     for i, j, _ in _channels(matrix):
@@ -116,12 +115,7 @@ def matrix_json(matrix: TransferMatrix, order: int) -> dict:
             }
         )
     return {
-        "ok": True,
-        "model": matrix.equations.causal.bondgraph.name,
-        "inputs": list(matrix.inputs),
-        "outputs": list(matrix.outputs),
-        "unknowns": list(params.unknowns),
-        "symbols": list(params.symbols),
+        **_record(matrix),
         "names": written.table,
         "A": written.text(matrix.A),
         "n": matrix.n,
@@ -158,6 +152,14 @@ def _tex(label: str) -> str:
 def thetas_json(matrix: TransferMatrix, thetas: dict[tuple[int, int], Theta], order: int) -> dict:
     """The `theta --json` record with several inputs or outputs: a record per channel as
     `theta --json` gives for one (without a zero entry's)."""
+    return {
+        **_record(matrix),
+        "channels": [report.derived_json(theta, order) for theta in thetas.values()],
+    }
+
+
+def _record(matrix: TransferMatrix) -> dict:
+    """What the JSON records of a transfer matrix begin with."""
     params = matrix.equations.parametrisation
     return {
         "ok": True,
@@ -166,5 +168,4 @@ def thetas_json(matrix: TransferMatrix, thetas: dict[tuple[int, int], Theta], or
         "outputs": list(matrix.outputs),
         "unknowns": list(params.unknowns),
         "symbols": list(params.symbols),
-        "channels": [report.derived_json(theta, order) for theta in thetas.values()],
     }
