@@ -215,3 +215,14 @@ def test_bode_draws_a_matrix_of_diagrams(capsys, tmp_path):
     record = json.loads(run(capsys, "bode", path, "--input", "Se:v1,Se:v2",
                             "--output", "Df:i1,Df:i2", "--json")[1])  # fmt: skip
     assert record["magnitude_db"][0][1] == [[None] * len(record["frequency"])]  # a zero entry
+
+
+def test_nonlinear_state_equations_take_one_input_and_one_output(capsys, tmp_path):
+    text = (ROOT / "models" / "two_tanks.bg").read_text()
+    path = tmp_path / "tanks.bg"
+    path.write_text(text + "0:h1 -> De:top\noutput De:level\n")
+    for extra in ([], ["--at", "u=10"]):
+        status, _, err = run(capsys, "ss", path, "--output", "De:level,De:top", *extra)
+        assert status == 2 and "error[several_signals]" in err
+        assert "take one input and one output" in err
+    assert run(capsys, "ss", path)[0] == 0

@@ -48,11 +48,25 @@ def equations_for(
     return linearised_for(graph, choice, identify)[2]
 
 
+def _one_signal(graph: BondGraph) -> None:
+    """The state equations x' = f(x, u), y = g(x, u) have one input and one output."""
+    if graph.several:
+        labels = lambda names: ", ".join(graph.component(n).label for n in names)  # noqa: E731
+        message = (
+            f"from {labels(graph.inputs)} to {labels(graph.outputs)}: the state equations "
+            "x' = f(x, u), y = g(x, u) (a nonlinear model's, its equilibria and its "
+            "small-signal model) take one input and one output: choose them with --input "
+            "TYPE:NAME --output TYPE:NAME"
+        )
+        raise ModelError(graph.source, [error("several_signals", message)])
+
+
 def linearised_for(
     graph: BondGraph, choice: ParameterChoice, identify: bool = False
 ) -> tuple[nonlinear.NonlinearStateSpace, operating.SmallSignal, Equations]:
     """Bond graph -> state equations -> the small-signal model at the operating point
     `choice.at`, and its equations for the linear chain."""
+    _one_signal(graph)
     causal = causal_for(graph, identify)
     parametrisation = parametrise(graph, choice)
     system = nonlinear.derive(causal, parametrisation)
@@ -72,6 +86,7 @@ def state_equations_for(
 ) -> tuple[nonlinear.NonlinearStateSpace, dict]:
     """Bond graph -> x' = f(x, u), y = g(x, u) (any model, linear or not), with the file's
     values of the parameters that stay symbolic (for numbers and signs)."""
+    _one_signal(graph)
     parametrisation = parametrise(graph, choice)
     return nonlinear.derive(causal_for(graph), parametrisation), values(parametrisation)
 
