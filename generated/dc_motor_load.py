@@ -14,14 +14,19 @@ The system
     n = 2 (degree of A in s), m = 0 (degree of B), N = 1 (degree in jl).
     Known values substituted exactly: ra = 1, la = 1/10, km = 1, jm = 1, b = 1/10.
 
-What is assumed
+What is assumed, and which answer is exact for what
     The system is linear and single-input single-output. Its coefficients are the
     polynomials in jl printed in `theta` below: every other parameter is known.
-    Between samples, the output is interpolated linearly, and so is the input (a
-    first-order hold) unless hold="zoh" says it was held from each sample to the next (a
-    zero-order hold). `fit` allows a non-zero initial state and an output offset (both on
-    by default); `estimate` and `Tracker` (the paper's algorithm) take the system at rest
-    at the first sample.
+    Between samples the input is interpolated linearly (a first-order hold of a
+    piecewise-linear input) unless hold="zoh" says it was held from each sample to the next
+    (a zero-order hold). `fit` (method="pem", the default) returns the minimiser of the
+    exact sampled-data prediction error for that hold, with a non-zero initial state, an
+    output offset (both on by default) and a noise model: exact on any record, long or
+    short. Its method="iv" and "ls", `estimate` and `Tracker` (the paper's algorithm) also
+    interpolate the sampled output linearly, which is exact for the cost they minimise but
+    not for the system: an error of order dt^2, harmless on long records, that decides the
+    answer on short ones (where the offset and initial state take most of the
+    information); `estimate` and `Tracker` take the system at rest at the first sample.
 
 How to use it
     import numpy as np
@@ -31,9 +36,10 @@ How to use it
     u = dc_motor_load.input_signal("prbs", t, period=1.0)   # held between switches: hold="zoh"
     clean = dc_motor_load.simulate(t, u, k=10.0, hold="zoh")
     y = dc_motor_load.with_noise(clean, 20.0)                # white noise, 20 dB SNR
-    # the whole record: unbiased under noise, with its standard error and warnings
+    # the whole record: the exact prediction error's minimiser, with its standard error,
+    # the noise model (white, AR or ARMA by the BIC) and warnings (ok False if contradicted)
     result = dc_motor_load.fit(t, u, y, hold="zoh")
-    result.k, result.k_se, result.ci, result.fit_percent, result.warnings
+    result.k, result.k_se, result.ci, result.fit_percent, result.noise, result.ok
     # a new record of the same system (its own initial state and offset estimated):
     result.compare(t2, u2, y2).fit_percent
     # the paper's recursive estimate from k0, and the global minimiser of its cost J:
@@ -52,9 +58,10 @@ API (the unknown is always called k here)
     theta(**known)                  Theta: rows a0..an, -b0..-bm; column j holds k^j terms
     transfer_function(k, **known)   (num, den), highest power of s first (scipy.signal)
     simulate(t, u, k, *, hold="linear", **known) -> y, exact for the stated hold
-    fit(t, u, y, *, method="iv", C="auto", k0=None, bounds=None, offset=True,
-        initial_state=True, hold="linear", beta=0.0, **known) -> Fit: k, k_se, ci,
-                                    fit_percent, residual_rms, warnings, minima,
+    fit(t, u, y, *, method="pem", noise="auto", C="auto", k0=None, bounds=None,
+        offset=True, initial_state=True, hold="linear", beta=0.0, **known) -> Fit: k,
+                                    k_se, ci, ok, fit_percent, residual_rms, noise,
+                                    warnings, minima,
                                     simulate(t, u, initial_state="zero"|"estimate", y=None),
                                     compare(t, u, y) -> Comparison: fit_percent, residual_rms
                                     on a new record, its initial state and offset estimated
@@ -72,12 +79,15 @@ API (the unknown is always called k here)
     with_noise(y, snr_db, *, seed=0)  y plus white Gaussian noise at an SNR in dB
     filter_states(t, w, *, C=None, hold="linear")  s^i w / C(s) at the sample times
     filter_polynomial(C)            the filter C(s) for a given C (text such as "(1+s)^5")
-    read_csv(path, columns)         named columns of a CSV file, as float arrays
+    read_csv(path, columns)         named columns of a CSV file, as float arrays (streamed,
+                                    bounded: CSVError, a ValueError, names file and line)
     EstimationWarning               the category of the warnings a user can act on
 
 The method: P. J. Gawthrop, R. W. Jones and S. A. MacKenzie, "Identification of
 partially-known systems", Automatica 28(4), 831-836, 1992, with the recursive
-polynomial-in-the-parameter least squares of Nihtila (1983); see `estimate`. `fit` adds
+polynomial-in-the-parameter least squares of Nihtila (1983); see `estimate`. `fit` starts
+from the global minimiser of the paper's cost and descends the exact prediction error
+(Gauss-Newton with analytic sensitivities, a Box-Jenkins noise model); method="iv" is
 refined instrumental variables (Young's SRIVC, for this structure); see `fit`.
 """
 
@@ -87,6 +97,7 @@ import json
 import math
 import os
 import re
+import stat
 import sys
 import warnings
 from bisect import bisect_left, bisect_right
@@ -147,10 +158,18 @@ def _real(name: str, value) -> float:
     try:
         number = float(value)
     except (TypeError, ValueError):
-        raise ValueError(f"{name} must be a real number, not {value!r}") from None
+        raise ValueError(f"{name} must be a real number, not {_short(value)}") from None
+    except OverflowError:  # an int such as 10**400
+        raise ValueError(f"{name} is out of floating-point range: {_short(value)}") from None
     if not math.isfinite(number):
         raise ValueError(f"{name} must be finite, not {number}")
     return number
+
+
+def _short(value) -> str:
+    """A value as a message shows it: its repr, cut to a readable length."""
+    text = repr(value)
+    return text if len(text) <= 60 else text[:40] + "..." + text[-12:]
 
 
 def _positive(name: str, value, allow_zero: bool = False) -> float:
@@ -169,6 +188,7 @@ def _choice(name: str, value: str, choices: tuple[str, ...]) -> str:
 SCALAR = len(UNKNOWNS) == 1  # one unknown: k is a float; several: a vector in UNKNOWNS order
 DEFAULT_RANGE = 10.0  # several unknowns: each searched within this factor of the model's value
 MAX_SIGNAL = 1e150  # size of an input or output sample: sums of squares stay finite
+MAX_TIME = 1e15  # size of a time stamp: beyond, its rounding (8 eps of it) exceeds a unit
 
 
 def _point(name: str, value) -> float | np.ndarray:
@@ -180,19 +200,30 @@ def _point(name: str, value) -> float | np.ndarray:
     if SCALAR:
         if np.ndim(value) == 1 and len(value) == 1:
             value = value[0]
-        return _real(name, value)
+        return _bounded_point(name, _real(name, value))
     try:
         array = np.array(value, dtype=float)
-    except (TypeError, ValueError):
+    except (TypeError, ValueError, OverflowError):
         array = None
     if array is None or array.shape != (len(UNKNOWNS),):
         raise ValueError(
             f"{name} must give the {len(UNKNOWNS)} unknowns {', '.join(UNKNOWNS)} (a sequence in "
-            f"that order, or a dict by name), not {value!r}"
+            f"that order, or a dict by name), not {_short(value)}"
         )
     for i, number in enumerate(array):
-        _real(f"{name}[{i}] ({UNKNOWNS[i]})", number)
+        _bounded_point(f"{name}[{i}] ({UNKNOWNS[i]})", _real(f"{name}[{i}] ({UNKNOWNS[i]})", number))
     return array
+
+
+def _bounded_point(name: str, number: float) -> float:
+    """A value of an unknown within MAX_SIGNAL: the estimator squares it (the prior's
+    weight, the cost's curvature), so beyond it floating point overflows."""
+    if abs(number) > MAX_SIGNAL:
+        raise ValueError(
+            f"{name} = {number:g} is out of range: the unknowns must stay within {MAX_SIGNAL:g} "
+            "in size (their squares overflow floating point); give them in a unit nearer 1"
+        )
+    return number
 
 
 def _shown(k) -> str:
@@ -232,8 +263,8 @@ def _interval(name: str, pair) -> tuple[float, float]:
     """(lo, hi) with lo < hi, each finite or infinite."""
     try:
         lo, hi = (float(value) for value in pair)
-    except (TypeError, ValueError):
-        raise ValueError(f"{name} must be a pair (lo, hi) of numbers, not {pair!r}") from None
+    except (TypeError, ValueError, OverflowError):
+        raise ValueError(f"{name} must be a pair (lo, hi) of numbers, not {_short(pair)}") from None
     if math.isnan(lo) or math.isnan(hi) or not lo < hi:
         raise ValueError(f"{name} must be (lo, hi) with lo < hi, not ({lo}, {hi})")
     return lo, hi
@@ -323,6 +354,8 @@ def _array(name: str, value) -> np.ndarray:
         array = np.asarray(value, dtype=float)
     except (TypeError, ValueError):
         raise ValueError(f"{name} must be an array of real numbers") from None
+    except OverflowError:  # ints such as 10**400
+        raise ValueError(f"{name} holds a number out of floating-point range") from None
     if array.ndim == 0:
         array = array.reshape(1)
     if array.ndim != 1:
@@ -335,13 +368,20 @@ def _array(name: str, value) -> np.ndarray:
 
 def _bounded(name: str, array: np.ndarray) -> None:
     """A signal whose squares and products stay within floating point (1e300 in a CSV file
-    made fit's least squares fail inside LAPACK, "SVD did not converge")."""
-    if array.size and np.abs(array).max() > MAX_SIGNAL:
+    made fit's least squares fail inside LAPACK, "SVD did not converge"), or times whose
+    steps stay above their rounding (one time of 1e308 fed to a Tracker made it refuse
+    every later sample)."""
+    limit = MAX_TIME if name == "t" else MAX_SIGNAL
+    if array.size and np.abs(array).max() > limit:
         i = int(np.argmax(np.abs(array)))
-        raise ValueError(
-            f"{name}[{i}] is {array[i]:g}: signals must stay within {MAX_SIGNAL:g} in size "
-            "(their squares overflow floating point); scale them to units nearer 1"
+        why = (
+            "times must stay within 1e+15 in size (beyond, a time stamp's rounding exceeds a "
+            "unit of time); count time from the record's start, in the model's unit"
+            if name == "t"
+            else f"signals must stay within {limit:g} in size (their squares overflow floating "
+            "point); scale them to units nearer 1"
         )
+        raise ValueError(f"{name}[{i}] is {array[i]:g}: {why}")
 
 
 def _sample(t, u, y, after: float) -> tuple[float, float, float] | None:
@@ -350,8 +390,11 @@ def _sample(t, u, y, after: float) -> tuple[float, float, float] | None:
     explains."""
     if not all(isinstance(value, int | float) for value in (t, u, y)):
         return None
-    t, u, y = float(t), float(u), float(y)
-    if not (math.isfinite(t) and t > after and abs(u) <= MAX_SIGNAL and abs(y) <= MAX_SIGNAL):
+    try:
+        t, u, y = float(t), float(u), float(y)
+    except OverflowError:
+        return None
+    if not (abs(t) <= MAX_TIME and t > after and abs(u) <= MAX_SIGNAL and abs(y) <= MAX_SIGNAL):
         return None
     return t, u, y
 
@@ -363,11 +406,8 @@ def _signals(*named: tuple[str, object], minimum: int, after: float = -math.inf)
     `after` is the time of a sample already seen (a Tracker's last): t must follow it.
     """
     if minimum <= 1 and all(isinstance(value, int | float) for _, value in named):
-        arrays = [np.array([float(value)]) for _, value in named]  # one sample, quickly
+        arrays = [_array(name, value) for name, value in named]  # one sample
         for (name, _), array in zip(named, arrays, strict=True):
-            if not math.isfinite(array[0]):
-                raise ValueError(f"{name}[0] is {array[0]}: every value must be finite")
-        for (name, _), array in list(zip(named, arrays, strict=True))[1:]:
             _bounded(name, array)
         if not arrays[0][0] > after:
             raise ValueError(
@@ -376,7 +416,7 @@ def _signals(*named: tuple[str, object], minimum: int, after: float = -math.inf)
             )
         return arrays
     arrays = [_array(name, value) for name, value in named]
-    for (name, _), array in list(zip(named, arrays, strict=True))[1:]:
+    for (name, _), array in zip(named, arrays, strict=True):
         _bounded(name, array)
     lengths = [array.size for array in arrays]
     if len(set(lengths)) > 1:
@@ -404,7 +444,7 @@ def transfer_function(k, **known: float) -> tuple[np.ndarray, np.ndarray]:
     """(num, den) of G(s) at k, highest power of s first (scipy.signal's convention); k the
     unknown's value (several: a vector in the order of UNKNOWNS, or a dict by name)."""
     k = _point("k", k)
-    coefficients = theta(**known) @ _K(k)  # [a0..an, -b0..-bm]
+    coefficients = _coefficients("k", theta(**known), k)  # [a0..an, -b0..-bm]
     den = np.trim_zeros(coefficients[n::-1], "f")
     num = np.trim_zeros(-coefficients[:n:-1], "f")
     if den.size == 0:
@@ -415,10 +455,17 @@ def transfer_function(k, **known: float) -> tuple[np.ndarray, np.ndarray]:
 def _responses(A, B, t: np.ndarray, W: np.ndarray, holds: tuple[str, ...], out=None,
                start=None) -> np.ndarray:  # fmt: skip
     """States (len(W), len(t), order) of x' = A x + B w from rest (or from the state
-    `start`), for each row w of W interpolated per its hold: one propagation for all the
-    signals (written into `out`, a view of that shape, if given)."""
+    `start`), for each row w of W interpolated per its hold (written into `out`, a view of
+    that shape, if given): `_response_rows` where it applies, else one propagation for all
+    the signals (`_propagate`)."""
     W = np.atleast_2d(W)
     steps = _Steps.of(t) if t.size > 1 else _Steps(np.ones(1), None)
+    states = np.empty((W.shape[0], t.size, A.shape[0])) if out is None else out
+    rows = _response_rows(A, B, t, W, holds, start, steps)
+    if rows is not None:
+        states[...] = rows.transpose(0, 2, 1)
+        return states
+    states[:, 0] = 0.0 if start is None else start
 
     def maps(values: np.ndarray):
         found = {hold: _transitions(A, B, values, hold) for hold in set(holds)}
@@ -426,8 +473,6 @@ def _responses(A, B, t: np.ndarray, W: np.ndarray, holds: tuple[str, ...], out=N
 
     if steps.index is None:
         Phi, Gamma = maps(steps.values)
-    states = np.empty((W.shape[0], t.size, A.shape[0])) if out is None else out
-    states[:, 0] = 0.0 if start is None else start
     ends = np.stack([W[:, :-1], W[:, 1:]], -1)
     chunk = BLOCK if steps.index is None else 2048
     for lo in range(0, t.size - 1, chunk):
@@ -438,6 +483,69 @@ def _responses(A, B, t: np.ndarray, W: np.ndarray, holds: tuple[str, ...], out=N
             Phi, Gamma = maps(steps.values[which])
         _propagate(Phi, Gamma, ends[:, lo : hi - 1], states[:, lo], index, out=states[:, lo:hi])
     return states
+
+
+def _response_rows(A, B, t, W, holds, start=None, steps=None) -> np.ndarray | None:
+    """`_responses`' states as rows, (len(W), order, len(t)), for regular sampling: in A's
+    balanced real Schur coordinates (`_schur_coordinates`), each signal by scalar
+    recursions (`_triangular`): no companion matrix is exponentiated, and the poles near
+    z = 1 at fine sampling stay on the diagonal. None where it does not apply (irregular
+    sampling, or an ill-conditioned complex pair)."""
+    steps = _Steps.of(t) if steps is None and t.size > 1 else steps
+    if steps is None or steps.index is not None or not A.shape[0] or not np.isfinite(A).all():
+        return None
+    F, V, inverse, blocks = _schur_coordinates(A)
+    if blocks is None:
+        return None
+    g = inverse @ B
+    z0 = inverse @ (np.zeros(A.shape[0]) if start is None else start)
+    maps = {hold: _transitions(F, g, steps.values, hold) for hold in set(holds)}
+    rows = np.empty((W.shape[0], A.shape[0], t.size))
+    for j, (w, hold) in enumerate(zip(W, holds, strict=True)):
+        Phi, Gamma = maps[hold]
+        drive = Gamma[0, 0][:, None] * w[:-1]
+        if hold == "linear":
+            drive += Gamma[0, 1][:, None] * w[1:]
+        if not _triangular(Phi[0], drive, z0, blocks, rows[j]):
+            return None
+        if V is not None:
+            rows[j] = V @ rows[j]
+    return rows
+
+
+def _schur_coordinates(A: np.ndarray):
+    """(F, V, V^-1, blocks): F = V^-1 A V quasi-triangular, V = D Q with D balancing A
+    (scipy's matrix_balance) and Q orthogonal (its real Schur form); blocks: F's diagonal
+    blocks (`_diagonal_blocks`). A quasi-triangular A is kept as it is (V None)."""
+    blocks = _diagonal_blocks(A)
+    if blocks is not None:
+        return A, None, np.eye(A.shape[0]), blocks
+    cascade = _cascade_coordinates(A)
+    if cascade is not None:
+        return cascade
+    balanced, (scale, _) = linalg.matrix_balance(A, permute=False, separate=True)
+    F, Q = linalg.schur(balanced, output="real")
+    return F, scale[:, None] * Q, Q.T / scale[None, :], _diagonal_blocks(F)
+
+
+def _cascade_coordinates(A: np.ndarray):
+    """`_schur_coordinates` of the companion matrix of (s + 1/T)^q (the state-variable
+    filters (1 + sT)^q, whose q-fold pole a Schur form would split into a ring of
+    ill-conditioned pairs): the cascade z_i = w / (1 + sT)^(q-i), upper bidiagonal, and
+    x_j = s^j w / C = sum_l binom(j, l) (-1)^(j-l) T^-j z_l (times C's own scale, which the
+    input map carries); None for any other A."""
+    q = A.shape[0]
+    if q < 2 or not np.array_equal(A[:-1], np.eye(q - 1, q, 1)) or not A[-1, -1] < 0:
+        return None
+    T = q / -A[-1, -1]  # (s + 1/T)^q = s^q + (q/T) s^(q-1) + ...
+    powers = (1.0 / T) ** np.arange(q, 0, -1)  # (1/T)^(q-i), i = 0..q-1
+    binomials = np.array([math.comb(q, i) for i in range(q)], dtype=float)
+    if not np.allclose(-A[-1], binomials * powers, rtol=1e-12, atol=0.0):
+        return None
+    F = (np.eye(q, k=1) - np.eye(q)) / T
+    V = np.array([[math.comb(j, l) * (-1.0) ** (j - l) * T**-j if l <= j else 0.0
+                   for l in range(q)] for j in range(q)])  # fmt: skip
+    return F, V, linalg.solve_triangular(V, np.eye(q), lower=True), [(i, 1) for i in range(q)]
 
 
 def simulate(t, u, k, *, hold: str = "linear", **known: float) -> np.ndarray:
@@ -551,6 +659,7 @@ TIME_RESOLUTION = 8 * np.finfo(float).eps  # relative precision of a time stamp
 BLOCK = 1 << 15  # samples per chunk of work: bounds the memory of long records
 
 
+MAX_FILTER_NESTING = 50  # parentheses in C(s) text (each level a recursion of the reader)
 MAX_FILTER_DEGREE = 24  # beyond, the roots of (1 + sT)^q are lost in rounding (spread eps^(1/q))
 _FILTER_TOKEN = re.compile(r"\s*(?:([0-9]+\.?[0-9]*(?:[eE][-+]?[0-9]+)?|\.[0-9]+(?:[eE][-+]?[0-9]+)?)|(\*\*|[-+*/^()])|(s))")
 
@@ -566,13 +675,21 @@ def _filter_text(text: str) -> np.ndarray:
         match = _FILTER_TOKEN.match(text, at)
         if not match:
             raise ValueError(
-                f"C(s) = {text!r}: cannot read {text[at:].strip()[:12]!r} at character {at + 1} "
+                f"C(s) = {_short(text)}: cannot read {text[at:].strip()[:12]!r} at character {at + 1} "
                 "(write a polynomial in s with numbers, + - * /, ^ and parentheses)"
             )
         number, operator, variable = match.groups()
         tokens.append(("number", float(number)) if number else (operator or variable, None))
         at = match.end()
     tokens.append(("end", None))
+    depth = level = 0
+    for kind, _ in tokens:  # each level of parentheses is a recursion of the reader below
+        level += (kind == "(") - (kind == ")")
+        depth = max(depth, level)
+    if depth > MAX_FILTER_NESTING:
+        raise ValueError(
+            f"C(s) = {_short(text)}: parentheses nested {depth} deep, more than {MAX_FILTER_NESTING}"
+        )
     position = 0
 
     def peek() -> str:
@@ -583,17 +700,17 @@ def _filter_text(text: str) -> np.ndarray:
         token = tokens[position]
         if kind is not None and token[0] != kind:
             found = "the end" if token[0] == "end" else repr(token[0] if token[1] is None else token[1])
-            raise ValueError(f"C(s) = {text!r}: expected {kind!r}, found {found}")
+            raise ValueError(f"C(s) = {_short(text)}: expected {kind!r}, found {found}")
         position += 1
         return token
 
     def checked(c: np.ndarray, *parts: np.ndarray) -> np.ndarray:
         """c, the product of parts, unless its coefficients left the floating-point range."""
         if not np.isfinite(c).all():
-            raise ValueError(f"C(s) = {text!r}: a coefficient overflows the floating-point range")
+            raise ValueError(f"C(s) = {_short(text)}: a coefficient overflows the floating-point range")
         if c.size < sum(part.size - 1 for part in parts) + 1 or (c[-1] == 0 and parts[0][-1]):
             raise ValueError(
-                f"C(s) = {text!r}: its leading coefficient underflows to 0 (the numbers are too "
+                f"C(s) = {_short(text)}: its leading coefficient underflows to 0 (the numbers are too "
                 "small or too large for floating point: change the time unit)"
             )
         return c
@@ -615,7 +732,7 @@ def _filter_text(text: str) -> np.ndarray:
             right = power()
             if operator == "/":
                 if right.size > 1 or right[0] == 0:
-                    raise ValueError(f"C(s) = {text!r}: divide only by a non-zero number")
+                    raise ValueError(f"C(s) = {_short(text)}: divide only by a non-zero number")
                 with np.errstate(over="ignore", under="ignore"):
                     c = checked(c / right[0], c)
             else:
@@ -630,7 +747,7 @@ def _filter_text(text: str) -> np.ndarray:
             exponent = take("number")[1]
             if not (math.isfinite(exponent) and exponent == int(exponent) <= MAX_FILTER_DEGREE):
                 raise ValueError(
-                    f"C(s) = {text!r}: the exponent {exponent:g} must be a whole number from 0 "
+                    f"C(s) = {_short(text)}: the exponent {exponent:g} must be a whole number from 0 "
                     f"to {MAX_FILTER_DEGREE}"
                 )
             result = np.ones(1)
@@ -653,7 +770,7 @@ def _filter_text(text: str) -> np.ndarray:
         if kind in ("+", "-"):
             return (1.0 if kind == "+" else -1.0) * atom()
         found = "the end" if kind == "end" else repr(kind)
-        raise ValueError(f"C(s) = {text!r}: expected a number, s or '(', found {found}")
+        raise ValueError(f"C(s) = {_short(text)}: expected a number, s or '(', found {found}")
 
     c = expression()
     if peek() != "end":
@@ -676,7 +793,7 @@ def filter_polynomial(C=None) -> np.ndarray:
         )
     if isinstance(C, str):
         c = _filter_text(C)[::-1]
-        name = f"C(s) = {C!r}"
+        name = f"C(s) = {_short(C)}"
     elif C is None or np.ndim(C) == 0:
         T = 1.0 if C is None else _positive("the filter time constant T", C)
         with np.errstate(over="ignore", under="ignore"):
@@ -970,6 +1087,18 @@ def _K(k) -> np.ndarray:
     if SCALAR:
         return k ** np.arange(N + 1)
     return np.prod(k ** _EXPONENTS, -1)
+
+
+def _coefficients(name: str, Theta: np.ndarray, k) -> np.ndarray:
+    """theta(k) = Theta @ K(k), or a ValueError when a coefficient leaves floating point."""
+    with np.errstate(over="ignore", invalid="ignore"):
+        coefficients = Theta @ _K(k)
+    if not np.isfinite(coefficients).all():
+        raise ValueError(
+            f"{name} = {_shown(k)} is out of range: the transfer function's coefficients at it "
+            "overflow floating point; give the unknowns in a unit nearer 1"
+        )
+    return coefficients
 
 
 def _theta_slopes(Theta: np.ndarray, k) -> np.ndarray:
@@ -2443,17 +2572,18 @@ def _filtered_moments(c, t, W, holds, needs, beta: float = 0.0) -> np.ndarray:
     order = c.size - 1
     A, B = _realisation(c)
     width = order + 2
-    V = np.empty((t.size, width * len(holds)))  # each interval's start [z; w; slope], per signal
-    blocks = V.reshape(t.size, len(holds), width)
-    _responses(A, B, t, W, holds, out=blocks[:, :, :order].swapaxes(0, 1))
+    # each interval's start [z; w; slope], per signal: a row per entry
+    V = np.empty((len(holds), width, t.size))
     steps = _Steps.of(t)
+    rows = _response_rows(A, B, t, W, holds, steps=steps)
+    V[:, :order] = rows if rows is not None else _responses(A, B, t, W, holds).transpose(0, 2, 1)
     h = steps.at(steps.values) if steps.index is not None else steps.values[0]
     for j, (w, hold) in enumerate(zip(W, holds, strict=True)):
-        blocks[:, j, order] = w
-        blocks[:-1, j, order + 1] = np.diff(w) / h if hold == "linear" else 0.0
-    V = V[:-1]  # the last sample starts no interval
+        V[j, order] = w
+        V[j, order + 1, :-1] = np.diff(w) / h if hold == "linear" else 0.0
+    V = V.reshape(-1, t.size)[:, :-1]  # the last sample starts no interval
     if beta:
-        V *= np.exp(-0.5 * beta * (t[-1] - t[:-1]))[:, None]
+        V = V * np.exp(-0.5 * beta * (t[-1] - t[:-1]))
     G = linalg.block_diag(*[_drift(A, B)] * len(holds))
     d = G.shape[0]
     G += 0.5 * beta * np.eye(d)
@@ -2461,10 +2591,10 @@ def _filtered_moments(c, t, W, holds, needs, beta: float = 0.0) -> np.ndarray:
     block[:, :d, :d] = -G
     block[:, d:, d:] = G.T
     if steps.index is None:
-        block[0, :d, d:] = V.T @ V
+        block[0, :d, d:] = V @ V.T
     else:  # one Gram matrix per distinct step
-        for lo in range(0, V.shape[0], 4096):
-            part = V[lo : lo + 4096]
+        for lo in range(0, V.shape[1], 4096):
+            part = V[:, lo : lo + 4096].T
             outer = part[:, :, None] * part[:, None, :]
             np.add.at(block[:, :d, d:], steps.index[lo : lo + 4096], outer)
     E = linalg.expm(block * steps.values[:, None, None])
@@ -2869,20 +2999,42 @@ def _realise(Theta: np.ndarray, k) -> _Realisation | None:
                         drest[:, n - 1 :: -1] @ V, dd)  # fmt: skip
 
 
+def _state_rows(F, g, t, u, hold: str, start=None) -> np.ndarray:
+    """The states (order, samples), a row per state, of z' = F z + g u from `start` (None:
+    rest)."""
+    rows = _response_rows(F, g, t, u[None], (hold,), start)
+    return rows[0] if rows is not None else _responses(F, g, t, u, (hold,), start=start)[0].T
+
+
 def _forced(real: _Realisation, t, u, hold: str) -> np.ndarray:
     """The output from rest at the samples (exact for the hold)."""
     if real.order == 0:
         return real.d * u
-    return _responses(real.F, real.g, t, u, (hold,))[0] @ real.h + real.d * u
+    return real.h @ _state_rows(real.F, real.g, t, u, hold) + real.d * u
 
 
 def _free(real: _Realisation, t: np.ndarray, steps: "_Steps") -> np.ndarray:
-    """The free responses h Phi(t_i - t_0) e_j at the samples, a column per state j."""
+    """The free responses h Phi(t_i - t_0) e_j at the samples, a column per state j.
+
+    Regular sampling: r_i = h Phi^i by blocks of L samples, r_(qL + j) = r_(qL) Phi^j, the
+    block starts following r_((q+1)L) = r_(qL) Phi^L (then below TINY: 0, where a fast
+    mode has died out), each block one product with the stacked powers Phi^0..Phi^(L-1)."""
     order = real.order
     Phi = linalg.expm(real.F * steps.values[:, None, None])
-    if steps.index is None:  # h Phi^i: one recursion of the transposed system, from h
-        quiet = np.zeros((1, t.size - 1, order))
-        return _propagate(np.swapaxes(Phi, 1, 2), None, quiet, real.h[None])[0]
+    if steps.index is None:
+        length = max(64, math.isqrt(t.size))
+        powers = np.empty((length + 1, order, order))
+        powers[0] = np.eye(order)
+        for j in range(length):
+            np.matmul(powers[j], Phi[0], out=powers[j + 1])
+        count = -(-t.size // length)
+        starts = np.empty((count, order))
+        starts[0] = real.h
+        for q in range(1, count):
+            np.matmul(starts[q - 1], powers[length], out=starts[q])
+        starts[np.abs(starts) < TINY] = 0.0  # (subnormal numbers are slow)
+        stacked = powers[:length].transpose(1, 0, 2).reshape(order, length * order)
+        return (starts @ stacked).reshape(count * length, order)[: t.size]
     quiet = np.zeros((order, t.size - 1, 1))
     Gamma = np.zeros((len(Phi), order, 1, order))
     states = _propagate(Phi, Gamma, quiet, np.eye(order), steps.index)  # (j, i, state)
@@ -2907,26 +3059,24 @@ def _nuisance_values(nu: np.ndarray, real: _Realisation, offset: bool, initial_s
 
 def _sensitivities(real: _Realisation, t, u, hold: str, z0) -> tuple[np.ndarray, np.ndarray]:
     """The output from the initial state z0 with input u (without offset), and its
-    derivatives with respect to the unknowns with z0 held: (samples,), (samples, unknowns)."""
+    derivatives with respect to the unknowns with z0 held: (samples,), (samples, unknowns).
+    The augmented state is [dz/dk_1; ..; dz/dk_p; z], upper quasi-triangular as F is."""
     count, order = len(real.dd), real.order
     if order == 0:
         return real.d * u, np.outer(u, real.dd)
     size = order * (1 + count)
-    F = np.zeros((size, size))
+    F = linalg.block_diag(*[real.F] * (count + 1))
+    F[: count * order, count * order :] = real.dF.reshape(count * order, order)
     g = np.zeros(size)
-    g[:order] = real.g
-    for j in range(count + 1):
-        F[j * order : (j + 1) * order, j * order : (j + 1) * order] = real.F
-        if j:
-            F[j * order : (j + 1) * order, :order] = real.dF[j - 1]
+    g[count * order :] = real.g
     start = np.zeros(size)
-    start[:order] = z0
-    states = _responses(F, g, t, u, (hold,), start=start)[0]
-    base = states[:, :order]
-    output = base @ real.h + real.d * u
-    blocks = states[:, order:].reshape(t.size, count, order)
-    slopes = np.einsum("ijr,r->ij", blocks, real.h) + base @ real.dh.T + np.outer(u, real.dd)
-    return output, slopes
+    start[count * order :] = z0
+    rows = _state_rows(F, g, t, u, hold, start)
+    base = rows[count * order :]
+    output = real.h @ base + real.d * u
+    slopes = (rows[: count * order].reshape(count, order, t.size).transpose(0, 2, 1) @ real.h
+              + real.dh @ base + np.outer(real.dd, u))  # fmt: skip
+    return output, slopes.T
 
 
 def _with_nuisances(t, u, y, k, *, hold: str, offset: bool, initial_state: bool, known: dict):
@@ -2947,6 +3097,81 @@ def _with_nuisances(t, u, y, k, *, hold: str, offset: bool, initial_state: bool,
     nu = np.linalg.lstsq(Xi, y - forced, rcond=None)[0] if Xi.shape[1] else np.zeros(0)
     value, z0 = _nuisance_values(nu, real, bool(offset), bool(initial_state))
     return forced + Xi @ nu, value, real.V @ z0
+
+
+# Regular sampling of a quasi-triangular system: the recursion as scalar recursions -------------
+#
+# With one sampling interval and A upper quasi-triangular (a real Schur form: 1 x 1 blocks and
+# 2 x 2 blocks of complex pairs), Phi = e^(A h) has the same blocks, and the recursion
+# z_(i+1) = Phi z_i + drive_i is solved from the last block up: each block's states follow a
+# scalar recursion (a complex one for a pair, in its eigenvector's coordinates) driven by
+# drive and the states below it, which scipy's lfilter runs. The arithmetic is the recursion's
+# own, with each pole on the diagonal (no polynomial in z, whose coefficients would lose the
+# poles crowding near z = 1 at fine sampling).
+
+PAIR_CONDITION = 100.0  # a complex pair's eigenvectors worse conditioned: the general recursion
+TRIANGULAR_CHUNK = 1 << 15  # samples per chunk of `_triangular`
+TINY = 1e-280  # a state below it is 0 between chunks (inputs and outputs are above 1e-100)
+
+
+def _diagonal_blocks(A: np.ndarray) -> list[tuple[int, int]] | None:
+    """(start, size) of the diagonal blocks of an upper quasi-triangular A (1 x 1 and 2 x 2),
+    or None when A is not one."""
+    size = A.shape[0]
+    if size == 0 or np.tril(A, -2).any():
+        return None
+    blocks, i = [], 0
+    while i < size:
+        if i + 1 < size and A[i + 1, i] != 0:
+            if i + 2 < size and A[i + 2, i + 1] != 0:
+                return None
+            blocks.append((i, 2))
+            i += 2
+        else:
+            blocks.append((i, 1))
+            i += 1
+    return blocks
+
+
+def _triangular(Phi: np.ndarray, drive: np.ndarray, z0: np.ndarray, blocks, out) -> bool:
+    """States z_0..z_N (into out, (order, N + 1): a row per state) of z_(i+1) = Phi z_i +
+    drive_i (drive (order, N), a row per state), Phi upper
+    quasi-triangular with the diagonal `blocks`; False (out undefined) when a 2 x 2 block is
+    not a well-conditioned complex pair (the general `_propagate` then).
+
+    In chunks of TRIANGULAR_CHUNK samples, between which states below TINY are 0: a
+    recursion that decays into subnormal numbers can stay there (the smallest one times
+    0.9 rounds to itself), and each step on them is a hundred times slower."""
+    if not np.isfinite(Phi).all():
+        return False
+    modes = []
+    for start, size in blocks:
+        if size == 2:
+            values, vectors = np.linalg.eig(Phi[start : start + 2, start : start + 2])
+            if values[0].imag == 0 or np.linalg.cond(vectors) > PAIR_CONDITION:
+                return False
+            modes.append((values[0], vectors[:, :1], np.linalg.inv(vectors)[0]))
+        else:
+            modes.append(None)
+    out[:, 0] = z0
+    count = out.shape[1] - 1
+    for lo in range(0, count, TRIANGULAR_CHUNK):
+        hi = min(count, lo + TRIANGULAR_CHUNK)
+        state = out[:, lo]
+        state[np.abs(state) < TINY] = 0.0
+        for (start, size), mode in zip(blocks[::-1], modes[::-1], strict=True):
+            end = start + size
+            w = drive[start:end, lo:hi]
+            if end < Phi.shape[0]:
+                w = w + Phi[start:end, end:] @ out[end:, lo:hi]
+            if mode is None:
+                a = Phi[start, start]
+                out[start, lo + 1 : hi + 1] = signal.lfilter([1.0], [1.0, -a], w[0], zi=[a * state[start]])[0]
+                continue
+            value, vector, row = mode  # the pair's first mode; the second its conjugate
+            x = signal.lfilter([1.0], [1.0, -value], row @ w, zi=[value * (row @ state[start:end])])[0]
+            out[start:end, lo + 1 : hi + 1] = 2.0 * (vector * x).real
+    return True
 
 
 # Validation on a new record: the fitted model against a record it was not fitted to -----------
@@ -2995,9 +3220,449 @@ def _compare(t, u, y, k, *, hold: str, known: dict) -> Comparison:
                       fitted=fitted, residuals=residuals)  # fmt: skip
 
 
-# The batch fit: whole records, unbiased under output noise, with the uncertainty of k -------------
+# The noise model: output noise v = H(q) e = C(q)/D(q) e (Box-Jenkins) -------------------------
+#
+# y = G(s, k) u + (initial state, offset) + v, with e white: the one-step prediction error is
+# eps = D(q)/C(q) (y - y^), whose sum of squares the exact fit minimises over k and the
+# coefficients of D and C together. The orders are chosen by the Bayesian information
+# criterion (BIC) from the output-error residuals at the white-noise estimate (consistent
+# under coloured noise): each candidate is fitted to them (autoregressions by least squares,
+# ARMA models by Hannan and Rissanen's two stages from a long autoregression's innovations),
+# scored by its exact prediction errors, and the chosen one refined with k. Everything here
+# works on sums over records (lagged products, sums of squares), so that records held
+# elsewhere answer with their own.
 
-FIT_METHODS = ("iv", "ls")  # refined instrumental variables (default), least squares
+NOISE_MODELS = ("auto", "white", "ar", "arma")
+AR_CAP, MA_CAP = 4, 2  # the highest orders of D and C tried
+LONG_AR = 12  # the long autoregression whose residuals stand for e (Hannan-Rissanen)
+STABLE = 0.999  # roots of D and C kept within this radius
+
+
+@dataclass(frozen=True)
+class NoiseModel:
+    """The fitted output noise v = C(q)/D(q) e, e white of standard deviation `std`.
+
+    ar: D's coefficients [1, d1, .., d_na] (in q^-1), ma: C's [1, c1, .., c_nc];
+    orders (na, nc); criterion: the BIC of the orders tried, by (na, nc), lowest chosen;
+    "white" when both are 0 (then eps is the output error itself).
+    """
+
+    ar: np.ndarray
+    ma: np.ndarray
+    std: float = math.nan
+    criterion: dict = field(default_factory=dict, repr=False)
+
+    @property
+    def orders(self) -> tuple[int, int]:
+        return len(self.ar) - 1, len(self.ma) - 1
+
+    @property
+    def kind(self) -> str:
+        na, nc = self.orders
+        return "white" if na == nc == 0 else f"AR({na})" if nc == 0 else f"ARMA({na},{nc})"
+
+    @property
+    def filters(self) -> tuple[np.ndarray, np.ndarray]:
+        """(ar, ma): the model as plain arrays, as it travels to records held elsewhere (whose
+        processes may know this module under another name)."""
+        return self.ar, self.ma
+
+    @property
+    def parameters(self) -> np.ndarray:
+        return np.r_[self.ar[1:], self.ma[1:]]
+
+    def with_parameters(self, p: np.ndarray) -> "NoiseModel":
+        na = self.orders[0]
+        return replace(self, ar=np.r_[1.0, p[:na]], ma=np.r_[1.0, p[na:]])
+
+    def whiten(self, x: np.ndarray) -> np.ndarray:
+        """D(q)/C(q) x along the first axis, from rest (the prediction errors of x)."""
+        if self.orders == (0, 0):
+            return x
+        return signal.lfilter(self.ar, self.ma, x, axis=0)
+
+    def record(self) -> dict:
+        """Plain values for JSON."""
+        return dict(kind=self.kind, orders=list(self.orders), ar=self.ar.tolist(),
+                    ma=self.ma.tolist(), std=self.std if math.isfinite(self.std) else None)  # fmt: skip
+
+
+WHITE = NoiseModel(np.ones(1), np.ones(1))
+
+
+def _noise_orders(noise: str) -> list[tuple[int, int]]:
+    """The candidate orders (na, nc) of a noise setting."""
+    ar = [(na, 0) for na in range(1, AR_CAP + 1)]
+    arma = [(na, nc) for nc in range(1, MA_CAP + 1) for na in range(1, AR_CAP + 1)]
+    return {"white": [(0, 0)], "ar": ar, "arma": arma, "auto": [(0, 0), *ar, *arma]}[noise]
+
+
+def _stable_polynomial(c: np.ndarray) -> np.ndarray:
+    """c (in q^-1, c[0] = 1) with its roots pulled within STABLE of the origin (roots
+    outside the unit circle reflected inside): a stable, inversely stable filter."""
+    if c.size < 2:
+        return c
+    roots = np.roots(c)
+    size = np.abs(roots)
+    if (size < STABLE).all():
+        return c
+    roots = np.where(size > 1, 1 / np.conj(roots), roots)
+    size = np.abs(roots)
+    roots = np.where(size > STABLE, roots * (STABLE / np.maximum(size, 1e-300)), roots)
+    return np.real(np.poly(roots))
+
+
+def _is_stable(c: np.ndarray) -> bool:
+    """Whether c's roots lie within STABLE of the origin (no unit root: a noise model that
+    integrates would read any drift of the model's error as noise)."""
+    return c.size < 2 or bool((np.abs(np.roots(c)) <= STABLE).all())
+
+
+def _lagged_gram(columns: list[tuple[np.ndarray, int]], start: int) -> np.ndarray:
+    """The Gram matrix sum_(t = start..N-1) of the columns x[t - lag], one per (x, lag),
+    without forming them: each entry is a full-length product of two signals at the lags'
+    difference, less the few terms outside the range (each signal's products at one
+    difference computed once)."""
+    size = columns[0][0].size
+    full: dict = {}
+    G = np.empty((len(columns), len(columns)))
+    for a, (x, i) in enumerate(columns):
+        for b in range(a, len(columns)):
+            z, j = columns[b]
+            d = j - i  # sum over s = start-i..N-1-i of x[s] z[s - d]
+            key = (id(x), id(z), d)
+            if key not in full:  # over every s where both are defined
+                full[key] = float(x[max(d, 0) : size + min(d, 0)] @ z[max(-d, 0) : size - max(d, 0)])
+            lo, hi = start - i, size - 1 - i
+            head = np.arange(max(d, 0), lo)
+            tail = np.arange(hi + 1, size + min(d, 0))
+            G[a, b] = G[b, a] = full[key] - x[head] @ z[head - d] - x[tail] @ z[tail - d]
+    return G
+
+
+def _lag_gram(v: np.ndarray, lags: int) -> np.ndarray:
+    """The Gram matrix of the lag vectors [v_t .. v_(t-lags)], t >= lags (zeros if shorter)."""
+    if v.size <= lags:
+        return np.zeros((lags + 1, lags + 1))
+    return _lagged_gram([(v, j) for j in range(lags + 1)], lags)
+
+
+def _regression(G: np.ndarray, columns: list[int]) -> np.ndarray:
+    """Least squares of Gram column 0 on the given columns, from the Gram matrix G."""
+    if not columns:
+        return np.zeros(0)
+    A = G[np.ix_(columns, columns)]
+    return np.linalg.lstsq(A, G[columns, 0], rcond=None)[0]
+
+
+def _innovation_gram(v: np.ndarray, long_ar: np.ndarray, lags: int) -> np.ndarray:
+    """The Gram matrix of [v_t, v_(t-1..t-lags), e_(t-1..t-lags)] with e = long_ar(q) v (the
+    long autoregression's residuals), t beyond both filters' start."""
+    start = long_ar.size - 1 + lags
+    if v.size <= start:
+        return np.zeros((2 * lags + 1, 2 * lags + 1))
+    e = signal.lfilter(long_ar, [1.0], v)
+    columns = [(v, j) for j in range(lags + 1)] + [(e, j) for j in range(1, lags + 1)]
+    return _lagged_gram(columns, start)
+
+
+def _candidates(lags: np.ndarray, innovations, orders, cap: int) -> list[NoiseModel]:
+    """The noise models of the given orders from the sums: autoregressions from the lag
+    Gram matrix, ARMA models from the innovation Gram matrix (Hannan-Rissanen)."""
+    found = []
+    for na, nc in orders:
+        if nc == 0:
+            d = -_regression(lags, list(range(1, na + 1)))
+            found.append(NoiseModel(_stable_polynomial(np.r_[1.0, d]), np.ones(1)))
+            continue
+        columns = list(range(1, na + 1)) + list(range(cap + 1, cap + 1 + nc))
+        p = _regression(innovations, columns)
+        ar = _stable_polynomial(np.r_[1.0, -p[:na]])
+        ma = _stable_polynomial(np.r_[1.0, p[na:]])
+        found.append(NoiseModel(ar, ma))
+    return found
+
+
+def _bic(rss: float, count: int, parameters: int) -> float:
+    return count * math.log(max(rss, 1e-300) / count) + parameters * math.log(count)
+
+
+def _noise_sums(v: np.ndarray, request: tuple):
+    """One record's part of a noise-model sum over its output-error residuals v: ("lags",
+    L) the lag Gram matrix, ("innovations", long_ar, L) the innovation Gram matrix,
+    ("errors", [(ar, ma), ..]) each noise model's sum of squared prediction errors."""
+    kind = request[0]
+    if kind == "lags":
+        return _lag_gram(v, request[1])
+    if kind == "innovations":
+        return _innovation_gram(v, request[1], request[2])
+    return np.array([float(np.sum(NoiseModel(*filters).whiten(v) ** 2)) for filters in request[1]])
+
+
+def _choose_noise(Theta, records, k, setting: str, settings, count: int) -> NoiseModel:
+    """The noise model of least BIC among the orders of `setting`, fitted to the records'
+    output-error residuals at k (`count` samples in all)."""
+    orders = _noise_orders(setting)
+    moving = any(nc for _, nc in orders)
+    cap = max(AR_CAP, MA_CAP)
+    lags = records.noise_sums(Theta, k, settings, ("lags", LONG_AR if moving else AR_CAP))
+    innovations = None
+    if moving:
+        long_ar = np.r_[1.0, -_regression(lags, list(range(1, LONG_AR + 1)))]
+        innovations = records.noise_sums(Theta, k, settings, ("innovations", long_ar, cap))
+    models = _candidates(lags, innovations, orders, cap)
+    errors = records.noise_sums(Theta, k, settings, ("errors", [m.filters for m in models]))
+    scores = {order: _bic(rss, count, sum(order)) for order, rss in zip(orders, errors, strict=True)}
+    best = min(range(len(orders)), key=lambda i: scores[orders[i]])
+    return replace(models[best], criterion=scores)
+
+
+# The exact fit: the minimiser of the sampled-data prediction error, from the paper's global one ---
+#
+# method="pem" (the default) minimises the sum of squared one-step prediction errors
+#     eps = D(q)/C(q) (y - G(s, k) u - initial-state response - offset)
+# over the records, G discretised exactly for the hold at every k (`_realise`), the offset and
+# initial state of each record eliminated by linear least squares at every point (variable
+# projection), the noise model D, C (`NoiseModel`; white: eps is the output error) fitted
+# with k. Gauss-Newton steps with Levenberg-Marquardt damping use the analytic derivatives:
+# with respect to k from the augmented system (`_sensitivities`), with respect to D and C by
+# filtering; with the nuisances held at their fitted values (Kaufman's variant of variable
+# projection, whose gradient is the projected cost's own). The steps start from the global
+# minimiser of the paper's least-squares cost (a polynomial in k, `_global_minimisers` or
+# `_search`) and from its other local minima (and k0, and the model file's values when they
+# fit better), and the lowest end is the estimate: global through the polynomial, exact
+# through the prediction error.
+
+PEM_ITERATIONS = 60  # Gauss-Newton steps at most from each start
+PEM_CONVERGED = 1e-10  # steps below this, relative: converged
+SETTLED_COST = 1e-6  # a Gauss-Newton step that would lower the cost by less than this many
+# noise variances (moving k by a thousandth of its standard error) is not taken: converged
+DAMPING = 1e-4  # the first Levenberg-Marquardt damping, relative to J^T J's diagonal
+GRAM_CONDITION = 1e8  # the nuisances' scaled Gram matrix factorised directly below this
+SAME_BASIN = 3.0  # a descent this many standard errors from a minimum found ends there
+
+
+@dataclass(frozen=True)
+class _Prediction:
+    """One record's exact prediction errors at a point: the sums of a Gauss-Newton step (they
+    add over records) and, at the end, what the Fit reports of the record."""
+
+    rss: float  # sum eps^2
+    samples: int
+    nuisances: int
+    gram: np.ndarray | None = None  # J^T J over the unknowns then the noise coefficients
+    slope: np.ndarray | None = None  # J^T eps
+    free: np.ndarray | None = None  # the unknowns' block of J^T J, the nuisances not projected
+    output_rss: float = math.nan  # sum (y - y^)^2
+    deviations: float = math.nan  # sum (y - mean y)^2
+    whiteness: float = 0.0  # Ljung-Box Q of eps
+    independence: float = 0.0  # eps's cross-correlation with the input, as chi-square
+    offset: float = 0.0
+    state: np.ndarray | None = None  # the initial state, in tf2ss's coordinates
+    fitted: np.ndarray | None = None
+    residuals: np.ndarray | None = None  # y - y^ (the output error)
+
+    def without_signals(self) -> "_Prediction":
+        return replace(self, fitted=None, residuals=None)
+
+
+class _Projection:
+    """Least squares on the columns of X (the nuisances' responses), by the corrected
+    semi-normal equations (Bjorck) with the R of X's QR factorisation, or of the Cholesky
+    factorisation of X^T X while that is well conditioned (below GRAM_CONDITION, where one
+    correction leaves an error of order (condition eps)^2): as accurate as projecting with
+    Q, without forming Q. Columns that depend on the others (an offset beside an
+    integrator's free response) are left out; `rank` counts the rest."""
+
+    def __init__(self, X: np.ndarray) -> None:
+        self.X = X
+        gram = X.T @ X
+        scale = np.sqrt(np.diag(gram))
+        scale = np.where(scale > 0, scale, 1.0)
+        gram = gram / np.outer(scale, scale)
+        R = None
+        if X.shape[1] and np.linalg.cond(gram) < GRAM_CONDITION:  # R from the Gram matrix
+            R = np.linalg.cholesky(gram).T
+        if R is None or not np.isfinite(R).all():
+            R = np.linalg.qr(X / scale, mode="r")
+        size = np.abs(np.diag(R))
+        self.kept = size > ROUNDING * X.shape[0] * max(size.max(initial=0.0), 1e-300)
+        if not self.kept.all():
+            self.X = X[:, self.kept]
+            scale = scale[self.kept]
+            R = np.linalg.qr(self.X / scale, mode="r")
+        self.R = R * scale  # of X itself: X = Q R
+        self.rank = int(self.kept.sum())
+
+    def _solve(self, W: np.ndarray) -> np.ndarray:
+        return linalg.solve_triangular(
+            self.R, linalg.solve_triangular(self.R, self.X.T @ W, trans="T"))
+
+    def fit(self, W: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """(coefficients (columns of X, columns of W), W less X times them)."""
+        coefficients = np.zeros((self.kept.size, W.shape[1]))
+        if not self.rank:
+            return coefficients, W
+        c = self._solve(W)
+        residual = W - self.X @ c
+        c += self._solve(residual)
+        coefficients[self.kept] = c
+        return coefficients, W - self.X @ c
+
+
+def _lagged(x: np.ndarray, lags: int) -> np.ndarray:
+    """Columns x delayed by 1..lags samples (zeros before the record)."""
+    out = np.zeros((x.size, lags))
+    for i in range(1, lags + 1):
+        out[i:, i - 1] = x[:-i]
+    return out
+
+
+def _record_prediction(Theta, record, k, noise: NoiseModel, settings, jacobian: bool,
+                       keep: bool = False) -> _Prediction:  # fmt: skip
+    """The record's prediction errors at k with the noise model: their sum of squares
+    alone, or (`jacobian`) with the Gauss-Newton sums (derivatives by k, then by D's and C's
+    coefficients) and the record's figures, or (`keep`) with its fitted output."""
+    t, u, y = record
+    offset, initial_state, hold = settings["offset"], settings["initial_state"], settings["hold"]
+    real = _realise(Theta, k)
+    if real is None or not _predictor_stable(real):
+        return _Prediction(math.inf, t.size, 0)
+    with np.errstate(all="ignore"):
+        forced = _forced(real, t, u, hold)
+        Xi = _nuisance_matrix(real, t, _Steps.of(t), offset, initial_state)
+        white = noise.whiten(np.column_stack([y - forced, Xi]))
+    if not np.isfinite(white).all():
+        return _Prediction(math.inf, t.size, Xi.shape[1])
+    projection = _Projection(white[:, 1:])
+    nu, eps = projection.fit(white[:, :1])
+    nu, eps = nu[:, 0], eps[:, 0]
+    rss = float(eps @ eps)
+    if not (jacobian or keep):
+        return _Prediction(rss, t.size, projection.rank, deviations=t.size * float(np.var(y)))
+    value, z0 = _nuisance_values(nu, real, offset, initial_state)
+    if not jacobian:
+        fitted = forced + Xi @ nu
+        return _Prediction(rss, t.size, projection.rank, offset=value, state=real.V @ z0,
+                           fitted=fitted, residuals=y - fitted)  # fmt: skip
+    with np.errstate(all="ignore"):
+        output, psi = _sensitivities(real, t, u, hold, z0)
+    fitted = output + value
+    residuals = y - fitted
+    na, nc = noise.orders
+    columns = [-noise.whiten(psi)]
+    if na:
+        columns.append(_lagged(signal.lfilter([1.0], noise.ma, residuals), na))
+    if nc:
+        columns.append(-_lagged(signal.lfilter([1.0], noise.ma, eps), nc))
+    J = np.concatenate(columns, 1)
+    free = J[:, : len(UNKNOWNS)].T @ J[:, : len(UNKNOWNS)]
+    J = projection.fit(J)[1]
+    return _Prediction(
+        rss, t.size, projection.rank, J.T @ J, J.T @ eps, free,
+        output_rss=float(residuals @ residuals), deviations=float(np.sum((y - y.mean()) ** 2)),
+        whiteness=_whiteness(eps), independence=_independence(eps, u), offset=value,
+        state=real.V @ z0,
+        fitted=fitted if keep else None, residuals=residuals if keep else None,
+    )  # fmt: skip
+
+
+def _predictor_stable(real: _Realisation) -> bool:
+    """Whether G(s, k) is stable (an integrator, a pole at 0, is allowed): the output-error
+    predictor of an unstable model diverges, and a noise model would read the divergence
+    as noise."""
+    poles = np.linalg.eigvals(real.F) if real.order else np.zeros(0)
+    size = float(np.abs(poles).max(initial=0.0))
+    return bool((poles.real <= ROUNDING * max(size, 1e-300) * real.order).all())
+
+
+def _independence(eps: np.ndarray, u: np.ndarray) -> float:
+    """N r^T R^-1 r: r the cross-correlations of the prediction errors with the input at
+    lags 0..WHITENESS_LAGS - 1, R the input's autocorrelations (a Toeplitz matrix):
+    about chi-square with that many degrees of freedom when the errors are white and
+    independent of the input, whatever the input's colour (Soderstrom and Stoica, 1989);
+    large when the model does not explain how the output answers the input."""
+    lags = min(WHITENESS_LAGS, eps.size // 4)
+    e, v = eps - eps.mean(), u - u.mean()
+    power = math.sqrt((e @ e) * (v @ v))
+    if lags < 1 or power == 0:
+        return 0.0
+    r = np.array([e[lag:] @ v[: v.size - lag] for lag in range(lags)]) / power
+    rho = np.array([v[lag:] @ v[: v.size - lag] for lag in range(lags)]) / (v @ v)
+    R = linalg.toeplitz(rho)
+    return float(eps.size * r @ np.linalg.lstsq(R, r, rcond=1e-8)[0])
+
+
+def _total(parts: list[_Prediction]) -> tuple[float, np.ndarray | None, np.ndarray | None]:
+    """The records' rss, J^T J and J^T eps (None without a Jacobian)."""
+    rss = sum(part.rss for part in parts)
+    if not math.isfinite(rss) or parts[0].gram is None:
+        return rss, None, None
+    return rss, sum(part.gram for part in parts), sum(part.slope for part in parts)
+
+
+def _admissible(noise: NoiseModel) -> bool:
+    return _is_stable(noise.ar) and _is_stable(noise.ma)
+
+
+def _gauss_newton(Theta, records, k, noise: NoiseModel, bounds, settings, samples: int,
+                  keep: bool = False, found=()):
+    """Levenberg-Marquardt from (k, noise) to a local minimum of the prediction error:
+    (k, noise, rss, iterations). Steps leave the bounds clipped; the noise model stays
+    stable and inversely stable. samples: the records'; keep: `prediction`'s. found: the
+    (k, rss, covariance) of minima already found: a descent that reaches one's quadratic
+    neighbourhood (within SAME_BASIN standard errors, its cost within MARGIN noise
+    variances) ends there, as it would."""
+    count = len(UNKNOWNS)
+    box = np.reshape(bounds, (-1, 2))
+    point = np.r_[np.atleast_1d(np.asarray(k, dtype=float)), noise.parameters]
+
+    def unpack(p):
+        return (float(p[0]) if SCALAR else p[:count].copy()), noise.with_parameters(p[count:])
+
+    def at(p):
+        k_, noise_ = unpack(p)
+        return _total(records.prediction(Theta, k_, noise_.filters, settings, True, keep))
+
+    rss, gram, slope = at(point)
+    if gram is None:
+        return *unpack(point), rss, 0
+    damping, iterations = DAMPING, 0
+    while iterations < PEM_ITERATIONS:
+        scale = np.sqrt(np.maximum(np.diag(gram), 1e-300))
+        newton = np.linalg.lstsq(gram / np.outer(scale, scale), slope / scale, rcond=None)[0]
+        if float(newton @ (slope / scale)) <= SETTLED_COST * rss / samples:
+            break  # Gauss-Newton's own step would lower the cost by a negligible amount
+        iterations += 1
+        while damping < 1e12:
+            matrix = gram / np.outer(scale, scale) + damping * np.eye(len(point))
+            step = -np.linalg.lstsq(matrix, slope / scale, rcond=None)[0] / scale
+            trial = point + step
+            trial[:count] = np.clip(trial[:count], box[:, 0], box[:, 1])
+            if _admissible(unpack(trial)[1]):
+                new = at(trial)
+                if new[0] <= rss and new[1] is not None:
+                    break
+            damping *= 10.0
+        else:
+            break  # no step lowers the error: a minimum (to rounding)
+        moved = np.abs(trial - point) <= PEM_CONVERGED * np.maximum(np.abs(point), 1e-300)
+        undamped = damping <= DAMPING
+        point, (rss, gram, slope) = trial, new
+        damping = max(damping / 10.0, 1e-12)
+        if moved.all() and undamped:  # (a damped step is short where the minimum is not)
+            break
+        for end, cost, covariance in found:
+            away = (point[:count] - np.atleast_1d(end)) @ np.linalg.pinv(covariance) @ (
+                point[:count] - np.atleast_1d(end))
+            if away < SAME_BASIN**2 and rss < cost + MARGIN * cost / samples:
+                return end, noise, cost, iterations
+    return *unpack(point), rss, iterations
+
+
+# The batch fit: whole records, exact for the hold, with the uncertainty of k ----------------------
+
+FIT_METHODS = ("pem", "iv", "ls")  # exact prediction error (default), refined IV, least squares
 MAX_ITERATIONS = 50
 CONVERGED = 1e-9  # the instrumental-variable steps stop when k^ moves less, relative
 SAMPLES_PER_FILTER = 10.0  # a filter time constant below this many sampling intervals is too fast
@@ -3018,10 +3683,13 @@ class Fit:
     k_se: its standard error, from the estimator's asymptotic variance with the noise
     variance estimated from the residuals; ci: the 95 % interval k +- 1.96 k_se;
     covariance: k's covariance matrix (unknowns x unknowns);
-    method: "iv" or "ls"; iterations: instrumental-variable steps taken (0 for "ls");
-    minima: the local minima of the last step's criterion within the bounds, ascending;
-    coefficients: that criterion as a polynomial in k (over BASIS: ascending powers for one
-    unknown; `cost` evaluates it);
+    ok: False when there is no estimate or when a diagnostic contradicts it (the reason
+    first among the warnings); method: "pem", "iv" or "ls"; iterations: Gauss-Newton steps
+    from the best start ("pem"), instrumental-variable steps ("iv"), 0 ("ls");
+    minima: the local minima of the polynomial criterion within the bounds, ascending
+    (for "pem" the paper's least-squares cost, whose minima start the exact descent; for
+    "iv" the last step's criterion); coefficients: that criterion as a polynomial in k (over
+    BASIS: ascending powers for one unknown; `cost` evaluates it);
     With several unknowns k and k_se are vectors in the order of UNKNOWNS, ci an array of
     (lo, hi) rows, bounds an array of them, and minima the local minima found by the global
     search (see `_search`), a row each, the lowest criterion first (`cost(minima)`).
@@ -3032,6 +3700,11 @@ class Fit:
     with zero input (an operating point; 0 without offset); filter: C(s) of the
     least-squares fit (highest power first); fitted, residuals: y^ and y - y^ per record
     (empty when `fit_records` left them where the records are).
+    noise: the fitted NoiseModel ("pem": orders and coefficients of D and C; None for "iv"
+    and "ls", which assume white noise); states: per record, the fitted initial state in the
+    coordinates of scipy.signal.tf2ss(*transfer_function(k)) ("pem"); exact_cost: half the
+    sum of squared prediction errors at k ("pem"); absorbed: the largest share of the
+    information about an unknown that the offset and initial state take (0 without them).
     """
 
     k: float
@@ -3055,6 +3728,10 @@ class Fit:
     hold: str = field(default="linear", repr=False)
     known: dict = field(default_factory=dict, repr=False)
     covariance: np.ndarray | None = field(default=None, repr=False)
+    noise: NoiseModel | None = None
+    states: tuple[np.ndarray, ...] = field(default=(), repr=False)
+    exact_cost: float = field(default=math.nan, repr=False)
+    absorbed: float = math.nan
 
     def cost(self, k):
         """The last step's criterion at k (scalar or array; several unknowns: points, the
@@ -3167,6 +3844,170 @@ def _weights(t: np.ndarray, beta: float) -> np.ndarray | None:
     return None if beta == 0 else np.exp(-beta * (t[-1] - t))
 
 
+def _step(Theta, records, k, c, bounds, beta, settings):
+    """One step of the fit: the records' moments (least squares for k None, else an
+    instrumental-variable step at k), summed, and the global minimiser of the criterion
+    (several unknowns: with the search's minima, `_Minima`; None for one)."""
+    total = records.moments(Theta, k, c, beta, settings)
+    coefficients = total.criterion(Theta)
+    if SCALAR:
+        return float(_global_minimisers(coefficients, 0.0, bounds)[0]), coefficients, total, None
+    found = _search(_tensor(coefficients), np.zeros(len(UNKNOWNS)), bounds,
+                    [] if k is None else [k])  # fmt: skip
+    best = found.points[0] if len(found.points) else np.full(len(UNKNOWNS), np.nan)
+    return best, coefficients, total, found
+
+
+def _model_point():
+    """The model file's values of the unknowns (None unless it gives every one)."""
+    if SCALAR or TRUE_VALUE is None:
+        return TRUE_VALUE
+    return None if any(value is None for value in TRUE_VALUE) else np.array(TRUE_VALUE)
+
+
+def fit(t, u, y, *, method: str = "pem", noise: str = "auto", C="auto", k0=None, bounds=None,
+        offset: bool = True, initial_state: bool = True, hold: str = "linear",
+        beta: float = 0.0, uncertainty: bool = True, **known) -> Fit:  # fmt: skip
+    """Fit k to whole records of input u and output y at times t: no prior, nothing to tune.
+
+    t, u, y are arrays (one record) or lists of arrays (several experiments; each has its
+    own offset and initial state). With several unknowns, k0 is a vector (or a dict by
+    name) and the search runs within bounds (a list of (lo, hi) per unknown or a dict by
+    name; by default the model file's values within a factor DEFAULT_RANGE).
+
+    method="pem" (the default) returns the minimiser of the exact sampled-data prediction
+    error (see `_exact_fit`): G(s, k) discretised exactly for the hold at every k, the
+    offset and initial state of each record eliminated exactly, the noise model fitted with
+    k; it starts from the global minimiser of the paper's least-squares cost (a polynomial
+    in k, minimised globally within bounds, by a search that proves no point of the box
+    lower with several unknowns) and from that cost's other local minima, and returns the
+    lowest: exact on any record for the stated hold, at any sampling interval, regular or
+    not. noise: the output noise model v = C(q)/D(q) e, "auto" (the default: white, AR or
+    ARMA, orders up to AR_CAP and MA_CAP by the BIC), "white", "ar" or "arma" (orders by the
+    BIC); k_se then comes from the joint prediction-error covariance. beta must be 0 (the
+    recursive `estimate` and `Tracker` forget; a fit of whole records weighs every sample
+    alike: fit the part of the record that matters).
+
+    method="iv" is refined instrumental variables (SRIVC, Young): from the least-squares
+    estimate (or k0), each step filters u and y with 1/A(s, k^), takes as instruments the
+    model's noise-free output at k^ filtered alike, and minimises the instrumental-variable
+    criterion (a polynomial in k) globally within bounds, until k^ moves less than CONVERGED:
+    consistent under white output noise, but its moments are exact for a linear
+    interpolation of the sampled output, not for the system (an error of order dt^2 that a
+    short record, whose offset and initial state take most of the information, magnifies).
+    method="ls" is the least-squares fit of the paper's cost J (biased by output noise;
+    the same interpolation). Both assume white noise (noise "auto" or "white"); with them
+    beta >= 0 weighs each sample by e^(-beta (t_end - t)) in their criteria.
+
+    C: the least-squares filter (see `filter_polynomial`); "auto" chooses (1 + sT)^(n+1)
+    from A(s, k) at k0 (else the model file's value, else the data) and the sampling, and
+    for "ls" refines it once at the estimate; for "iv" an explicit C also multiplies the
+    prefilter; for "pem" it is the starting point's filter. offset: estimate a constant
+    output offset (an operating point of u and y); initial_state: allow the system not to be
+    at rest at the first sample. Both are nuisance parameters, projected out.
+    uncertainty=False: the estimate and the criterion alone (no standard error, no
+    validation against the simulated output: k_se, ci, fit_percent, residual_rms,
+    noise_std and any offsets to estimate are NaN), for many records.
+    Every problem a user can act on is in `warnings` and issued as an EstimationWarning;
+    ok is False, the reason first among them, when one contradicts the estimate.
+    """
+    return fit_records(Records(_records(t, u, y)), method=method, noise=noise, C=C, k0=k0,
+                       bounds=bounds, offset=offset, initial_state=initial_state, hold=hold,
+                       beta=beta, uncertainty=uncertainty, **known)  # fmt: skip
+
+
+def fit_records(records, *, method: str = "pem", noise: str = "auto", C="auto", k0=None,
+                bounds=None, offset: bool = True, initial_state: bool = True,
+                hold: str = "linear", beta: float = 0.0, keep: bool = True,
+                uncertainty: bool = True, **known) -> Fit:  # fmt: skip
+    """`fit` over records wherever they are held: `Records` (here) or an object with the
+    same methods (shapes, moments, validate, residual_sum, prediction, noise_sums) whose
+    answers are sums over records held elsewhere. Only those sums and the shapes reach this
+    function, so a fit over records spread across processes runs these same steps.
+    keep=False: the Fit has no fitted outputs and residuals (they stay where the records
+    are)."""
+    _choice("method", method, FIT_METHODS)
+    _choice("noise", noise, NOISE_MODELS)
+    _choice("hold", hold, HOLDS)
+    beta = _positive("beta", beta, allow_zero=True)
+    if method == "pem" and beta:
+        raise ValueError(
+            f"beta = {beta:g}: the exact fit (method='pem') weighs every sample of a record "
+            "alike; forgetting belongs to the recursive estimate (estimate, Tracker); fit the "
+            "part of the record that matters, or use method='iv' to weigh samples by "
+            "e^(-beta (t_end - t))"
+        )
+    if method != "pem" and n == 0:
+        raise ValueError(
+            f"{MODEL} is static (A(s) has degree 0): method={method!r} filters by A(s, k); the "
+            "default method='pem' fits a static model exactly"
+        )
+    if method != "pem" and noise not in ("auto", "white"):
+        raise ValueError(
+            f"noise={noise!r} is fitted by the exact prediction-error method (method='pem', "
+            f"the default); method={method!r} assumes white noise"
+        )
+    bounds = _bounds(bounds)
+    k0 = None if k0 is None else _point("k0", k0)
+    offset, initial_state = bool(offset), bool(initial_state)
+    Theta = theta(**known)
+    automatic = isinstance(C, str) and C.strip() == "auto"
+    c = None if automatic else filter_polynomial(C)
+    shapes = records.shapes()
+    if not shapes:
+        raise ValueError("no records to fit")
+    _check_sizes(shapes, offset, initial_state)
+    longest = max(shape.span for shape in shapes)
+    if beta * longest > 700:  # e^-700: the start of a record weighs nothing in floating point
+        raise ValueError(
+            f"beta = {beta:g} weighs the start of a record of {longest:g} time units by "
+            f"e^-{beta * longest:.3g}, below floating point: use beta < {700 / longest:.3g}"
+        )
+    settings = dict(hold=hold, offset=offset, initial_state=initial_state, known=known)
+    notes: list[str] = []
+    interval, span = _median_step(shapes), min(shape.span for shape in shapes)
+    if automatic:
+        c = _filter_for(Theta, k0 if k0 is not None else _model_point(), interval, span)
+    with np.errstate(all="ignore"):
+        k, coefficients, total, found = _step(Theta, records, None, c, bounds, beta, settings)
+        if automatic and method == "ls" and np.all(np.isfinite(k)):
+            c = _filter_for(Theta, k, interval, span)
+            k, coefficients, total, found = _step(Theta, records, None, c, bounds, beta, settings)
+        iterations = 0
+        if method == "pem":
+            return _exact_fit(Theta, records, shapes, k, coefficients, total, found, c=c, k0=k0,
+                              bounds=bounds, noise=noise, settings=settings, keep=keep,
+                              uncertainty=bool(uncertainty), automatic=automatic)  # fmt: skip
+        others = [("k0", k0), ("the model file's value", _model_point())]
+        if method == "iv":
+            others.append(("the least-squares estimate", k))
+            extra = None if automatic else c
+            k = k0 if k0 is not None else k
+            previous = math.inf
+            while np.all(np.isfinite(k)) and iterations < MAX_ITERATIONS:
+                new, coefficients, total, found = _step(Theta, records, k, extra, bounds, beta,
+                                                        settings)  # fmt: skip
+                iterations += 1
+                change, k = np.abs(new - k), new
+                step = float(np.max(change))
+                if np.all(change <= CONVERGED * np.abs(k)) or step == previous == 0:
+                    break
+                previous = step
+            else:
+                if np.all(np.isfinite(k)):
+                    notes.append(
+                        f"the instrumental-variable steps did not settle in {MAX_ITERATIONS} "
+                        f"iterations (the last moved k by {step:.3g}): the estimate may be poor"
+                    )
+    return _finish(Theta, records, shapes, k, coefficients, method=method, c=c,
+                   iterations=iterations, bounds=bounds, beta=beta, notes=notes,
+                   automatic=automatic, settings=settings, last_moments=total, keep=keep,
+                   found=found, others=others, uncertainty=bool(uncertainty))  # fmt: skip
+
+
+# The records of a fit: their shapes, and the sums every step of a fit asks them for -------------
+
+
 @dataclass(frozen=True)
 class Shape:
     """What a fit needs to know of one record besides its moments (small, whatever the
@@ -3215,15 +4056,17 @@ def _check_sizes(shapes, offset: bool, initial_state: bool) -> None:
 class Records:
     """The records of a fit, held in this process: `fit_records` asks them only for sums
     (moments, validation sums) and their shapes, so that records held elsewhere (by worker
-    processes, on a cluster: mtt.batch) can offer the same four methods, each answer the
+    processes, on a cluster: mtt.batch) can offer the same methods, each answer the
     sum of their parts', and be fitted by the same algorithm without moving the data.
 
-    records: checked (t, u, y) arrays, one triple per record. `validate` returns each
-    record's _Record; keep=False drops its fitted output and residuals (only sums travel).
+    records: checked (t, u, y) arrays, one triple per record. `validate` and `prediction`
+    return each record's part; keep=False drops its fitted output and residuals (only sums
+    travel).
     """
 
     def __init__(self, records) -> None:
         self.records = list(records)
+        self._kept: dict = {}  # the last few answers of `prediction`, by their question
 
     def shapes(self) -> list[Shape]:
         return [Shape.of(t, u) for t, u, _ in self.records]
@@ -3246,125 +4089,32 @@ class Records:
         """The output-error residual sum of squares at k over the records."""
         return sum(_residual_sum(Theta, record, k, settings) for record in self.records)
 
+    def prediction(self, Theta, k, filters, settings, jacobian: bool, keep: bool = False) -> list:
+        """Each record's exact prediction errors at k with the noise model's filters (ar, ma)
+        (`_record_prediction`); keep=True also their signals (dropped by records held
+        elsewhere: only sums travel). The last few answers are kept: the fit asks again at
+        its estimate."""
+        noise = NoiseModel(*(np.asarray(f, dtype=float) for f in filters))
+        key = (_settings_key(k, settings), noise.ar.tobytes(), noise.ma.tobytes(), jacobian, keep)
+        if key not in self._kept:
+            if len(self._kept) >= 4:
+                self._kept.pop(next(iter(self._kept)))
+            self._kept[key] = [_record_prediction(Theta, record, k, noise, settings, jacobian, keep)
+                               for record in self.records]  # fmt: skip
+        return self._kept[key]
 
-def _step(Theta, records, k, c, bounds, beta, settings):
-    """One step of the fit: the records' moments (least squares for k None, else an
-    instrumental-variable step at k), summed, and the global minimiser of the criterion
-    (several unknowns: with the search's minima, `_Minima`; None for one)."""
-    total = records.moments(Theta, k, c, beta, settings)
-    coefficients = total.criterion(Theta)
-    if SCALAR:
-        return float(_global_minimisers(coefficients, 0.0, bounds)[0]), coefficients, total, None
-    found = _search(_tensor(coefficients), np.zeros(len(UNKNOWNS)), bounds,
-                    [] if k is None else [k])  # fmt: skip
-    best = found.points[0] if len(found.points) else np.full(len(UNKNOWNS), np.nan)
-    return best, coefficients, total, found
-
-
-def _model_point():
-    """The model file's values of the unknowns (None unless it gives every one)."""
-    if SCALAR or TRUE_VALUE is None:
-        return TRUE_VALUE
-    return None if any(value is None for value in TRUE_VALUE) else np.array(TRUE_VALUE)
-
-
-def fit(t, u, y, *, method: str = "iv", C="auto", k0=None, bounds=None, offset: bool = True,
-        initial_state: bool = True, hold: str = "linear", beta: float = 0.0,
-        uncertainty: bool = True, **known) -> Fit:  # fmt: skip
-    """Fit k to whole records of input u and output y at times t: no prior, nothing to tune.
-
-    t, u, y are arrays (one record) or lists of arrays (several experiments: their moments
-    add; each has its own offset and initial state). With several unknowns, k0 is a vector
-    (or a dict by name) and the criterion's global minimum is searched within bounds (a list
-    of (lo, hi) per unknown or a dict by name; by default the model file's values within a
-    factor DEFAULT_RANGE), by a search that proves no point of the box lower (`_search`). method="iv" (the default) is a refined
-    instrumental-variable estimator (SRIVC, Young): from the least-squares estimate (or k0),
-    each step filters u and y with 1/A(s, k^), takes as instruments the model's noise-free
-    output at k^ filtered alike, and minimises the instrumental-variable criterion (a
-    polynomial in k) globally within bounds, until k^ moves less than CONVERGED: unbiased
-    under output noise, with the variance of output-error least squares. method="ls" is the
-    least-squares fit of the paper's cost J (biased by output noise).
-
-    C: the least-squares filter (see `filter_polynomial`); "auto" chooses (1 + sT)^(n+1)
-    from A(s, k) at k0 (else the model file's value, else the data) and the sampling, and
-    for "ls" refines it once at the estimate; for "iv" an explicit C also multiplies the
-    prefilter. offset: estimate a constant offset (an operating point of u and y);
-    initial_state: allow the system not to be at rest at the first sample. Both are
-    nuisance parameters, projected out. beta >= 0 weighs recent data more (0: all alike).
-    uncertainty=False: the estimate and the criterion alone, several times faster (no
-    standard error, no validation against the simulated output: k_se, ci, fit_percent,
-    residual_rms, noise_std and any offsets to estimate are NaN), for many records.
-    Every problem a user can act on is in `warnings` and issued as an EstimationWarning.
-    """
-    return fit_records(Records(_records(t, u, y)), method=method, C=C, k0=k0, bounds=bounds,
-                       offset=offset, initial_state=initial_state, hold=hold, beta=beta,
-                       uncertainty=uncertainty, **known)  # fmt: skip
+    def noise_sums(self, Theta, k, settings, request):
+        """The sums over the records' output-error residuals at k that the choice of a
+        noise model asks for (`_noise_sums`)."""
+        key = (_settings_key(k, settings), WHITE.ar.tobytes(), WHITE.ma.tobytes(), True, True)
+        parts = self._kept.get(key) or self.prediction(Theta, k, WHITE.filters, settings, False, True)
+        return sum(_noise_sums(part.residuals, request) for part in parts)
 
 
-def fit_records(records, *, method: str = "iv", C="auto", k0=None, bounds=None,
-                offset: bool = True, initial_state: bool = True, hold: str = "linear",
-                beta: float = 0.0, keep: bool = True, uncertainty: bool = True,
-                **known) -> Fit:  # fmt: skip
-    """`fit` over records wherever they are held: `Records` (here) or an object with the
-    same methods (shapes, moments, validate, residual_sum) whose answers are sums over
-    records held elsewhere. Only those sums and the shapes reach this function, so a fit
-    over records spread across processes runs these same steps. keep=False: the Fit has
-    no fitted outputs and residuals (they stay where the records are)."""
-    _choice("method", method, FIT_METHODS)
-    _choice("hold", hold, HOLDS)
-    beta = _positive("beta", beta, allow_zero=True)
-    bounds = _bounds(bounds)
-    k0 = None if k0 is None else _point("k0", k0)
-    offset, initial_state = bool(offset), bool(initial_state)
-    Theta = theta(**known)
-    automatic = isinstance(C, str) and C.strip() == "auto"
-    c = None if automatic else filter_polynomial(C)
-    shapes = records.shapes()
-    if not shapes:
-        raise ValueError("no records to fit")
-    _check_sizes(shapes, offset, initial_state)
-    longest = max(shape.span for shape in shapes)
-    if beta * longest > 700:  # e^-700: the start of a record weighs nothing in floating point
-        raise ValueError(
-            f"beta = {beta:g} weighs the start of a record of {longest:g} time units by "
-            f"e^-{beta * longest:.3g}, below floating point: use beta < {700 / longest:.3g}"
-        )
-    settings = dict(hold=hold, offset=offset, initial_state=initial_state, known=known)
-    notes: list[str] = []
-    interval, span = _median_step(shapes), min(shape.span for shape in shapes)
-    if automatic:
-        c = _filter_for(Theta, k0 if k0 is not None else _model_point(), interval, span)
-    with np.errstate(all="ignore"):
-        k, coefficients, total, found = _step(Theta, records, None, c, bounds, beta, settings)
-        if automatic and method == "ls" and np.all(np.isfinite(k)):
-            c = _filter_for(Theta, k, interval, span)
-            k, coefficients, total, found = _step(Theta, records, None, c, bounds, beta, settings)
-        iterations = 0
-        others = [("k0", k0), ("the model file's value", _model_point())]
-        if method == "iv":
-            others.append(("the least-squares estimate", k))
-            extra = None if automatic else c
-            k = k0 if k0 is not None else k
-            previous = math.inf
-            while np.all(np.isfinite(k)) and iterations < MAX_ITERATIONS:
-                new, coefficients, total, found = _step(Theta, records, k, extra, bounds, beta,
-                                                        settings)  # fmt: skip
-                iterations += 1
-                change, k = np.abs(new - k), new
-                step = float(np.max(change))
-                if np.all(change <= CONVERGED * np.abs(k)) or step == previous == 0:
-                    break
-                previous = step
-            else:
-                if np.all(np.isfinite(k)):
-                    notes.append(
-                        f"the instrumental-variable steps did not settle in {MAX_ITERATIONS} "
-                        f"iterations (the last moved k by {step:.3g}): the estimate may be poor"
-                    )
-    return _finish(Theta, records, shapes, k, coefficients, method=method, c=c,
-                   iterations=iterations, bounds=bounds, beta=beta, notes=notes,
-                   automatic=automatic, settings=settings, last_moments=total, keep=keep,
-                   found=found, others=others, uncertainty=bool(uncertainty))  # fmt: skip
+def _settings_key(k, settings) -> tuple:
+    """What makes a record's prediction at k: k and the fit's settings."""
+    return (np.asarray(k, dtype=float).tobytes(), settings["hold"], settings["offset"],
+            settings["initial_state"], tuple(sorted(settings["known"].items())))  # fmt: skip
 
 
 # The fit's verdict: its uncertainty, its fit and the warnings a user can act on ------------------
@@ -3489,15 +4239,16 @@ def _fit_minima(coefficients, bounds, found) -> np.ndarray:
 
 
 def _elsewhere(records, Theta, settings, k, k_se, bounds, rss, variance, others, minima,
-               method) -> list[str]:  # fmt: skip
-    """Points the fit did not end at (k0, the model file's values, the least-squares start
+               method) -> list[tuple[float, str]]:  # fmt: skip
+    """(extra, text) for the points the fit did not end at (k0, the model file's values, the least-squares start
     of the instrumental-variable steps), within the bounds, outside the 95 % interval and
     away from the criterion's other minima (warned about on their own), that fit the data
     better than the estimate, or nearly as well (within MARGIN noise variances) although
     more than twice the interval's half-width away: then the record determines k far less
     than k_se, a figure from the neighbourhood of the estimate, says (a short record whose
     offset and initial state absorb the slow dynamics), or, for least squares, its bias
-    under output noise shows."""
+    under output noise shows. extra: the point's residual sum of squares less the
+    estimate's."""
     said, seen = [], []
     box = np.reshape(bounds, (-1, 2))
     se = np.reshape(k_se, -1)
@@ -3517,15 +4268,16 @@ def _elsewhere(records, Theta, settings, k, k_se, bounds, rss, variance, others,
         if not (extra < 0 or (away > 2 * Z95 and extra < MARGIN * variance)):
             continue
         differs = f" by {extra / variance:+.3g} noise variances" if variance > 0 else ""
-        said.append(
+        said.append((extra,
             f"{label}, {_named_point(float(point[0]) if SCALAR else point)}, fits the data "
             f"{'better' if extra < 0 else 'nearly as well'} (the residual sums of squares "
             f"differ{differs}) though it lies {away:.3g} standard errors from the estimate: "
-            + ("least squares is biased by output noise (method='iv', the default, is not), "
-               "or " if method == "ls" else "")
-            + "the record determines k far less than k_se says; use a longer or richer record "
-            "(or offset=False, initial_state=False if it starts at rest), or bounds"
-        )
+            + ("least squares is biased by output noise, or " if method == "ls" else "")
+            + "the record determines k far less than k_se says, or the method's criterion is "
+            "not the exact output error (method='pem', the default, minimises it); use a "
+            "longer or richer record (or offset=False, initial_state=False if it starts at "
+            "rest), or bounds"
+        ))
     return said
 
 
@@ -3538,170 +4290,9 @@ def _criterion_curvature(coefficients: np.ndarray, k) -> np.ndarray:
     return _local_form(_shift(_tensor(coefficients), k))[2]
 
 
-def _finish(Theta, records, shapes, k, coefficients, *, method, c, iterations, bounds, beta,
-            notes, automatic, settings, last_moments, keep, found=None, others=(),
-            uncertainty=True) -> Fit:  # fmt: skip
-    """The Fit: validation at k, uncertainty, warnings (issued as EstimationWarning)."""
-    nuisances = settings["offset"] or settings["initial_state"]
-    said, idle = _input_warnings(shapes, settings["hold"], nuisances)
-    found_ = list(notes) + said
-    if method == "ls":
-        step = _median_step(shapes)
-        found_ += (_auto_filter_warnings(step, min(shape.span for shape in shapes)) if automatic
-                   else _filter_warnings_at(c, step))  # fmt: skip
-    minima = _fit_minima(coefficients, bounds, found)
-    count_ = len(UNKNOWNS)
-    common = dict(method=method, iterations=iterations, minima=minima, coefficients=coefficients,
-                  bounds=bounds, filter=c, hold=settings["hold"], known=dict(settings["known"]))  # fmt: skip
-    if not np.all(np.isfinite(k)):
-        if not (coefficients[1:] != 0).any():
-            message = (
-                f"the data carry no information about {UNKNOWN or ', '.join(UNKNOWNS)}: the "
-                "criterion does not depend on k"
-            )
-        elif SCALAR:
-            message = "the criterion decreases without bound: bound the search with bounds=(lo, hi)"
-        else:
-            message = (
-                "the criterion has no local minimum within the bounds (it is flat along some "
-                "direction there): the data do not determine the unknowns"
-            )
-        none = math.nan if SCALAR else np.full(len(UNKNOWNS), math.nan)
-        return _unvalidated(shapes, keep, 0.0, none, math.inf,
-                            dict(ok=False, message=message, warnings=tuple(found_), **common))  # fmt: skip
-    if not uncertainty:  # the estimate alone, for speed: many records, or every few samples
-        found_ += _box_warnings(k, bounds, found)
-        message = (f"{method}: {_named_point(k)} (uncertainty=False: no standard error, no "
-                   "validation)")  # fmt: skip
-        offset = math.nan if settings["offset"] else 0.0  # (estimated in the validation)
-        return _unvalidated(shapes, keep, offset, k, math.nan,
-                            dict(ok=True, message=message, warnings=tuple(found_), **common))  # fmt: skip
-    with np.errstate(all="ignore"):
-        parts = records.validate(Theta, k, method, c, beta, settings, keep)
-        count = sum(shape.samples for shape in shapes)
-        rss = sum(part.rss for part in parts)
-        dof = count - sum(part.nuisances for part in parts) - count_
-        variance = rss / dof if dof > 0 else math.nan
-        information = sum(part.information for part in parts)  # matrices over the unknowns
-        if method == "iv":  # the output-error covariance (a sandwich, for the weights)
-            bread, meat = information, sum(part.spread for part in parts)
-        else:  # least squares: J'' around how the noise moves J'
-            bread, meat = _criterion_curvature(coefficients, k), sum(part.influence for part in parts)
-        identifiable = bool(np.all(np.linalg.eigvalsh(information) > 0))
-        inverse = np.linalg.pinv(bread)
-        covariance = variance * inverse @ meat @ inverse.T
-        variances = np.diag(covariance)
-        k_se = np.sqrt(np.where(variances >= 0, variances, math.nan))
-        deviations = sum(part.deviations for part in parts)
-        fit_percent = 100.0 * (1.0 - math.sqrt(rss / deviations)) if deviations > 0 else math.nan
-    ok = True
-    if SCALAR:
-        k_se = float(k_se[0])
-        message = f"{method}: k = {k:.6g} +- {k_se:.3g} (standard error)"
-    else:
-        message = f"{method}: " + ", ".join(
-            f"{name} = {value:.6g} +- {se:.3g}" for name, value, se in zip(UNKNOWNS, k, k_se, strict=True)
-        ) + " (standard errors)"
-    if not (identifiable and np.all(np.isfinite(k_se))):
-        ok, k_se = False, (math.inf if SCALAR else np.full(count_, math.inf))
-        if SCALAR:
-            message = f"{UNKNOWN} is not identifiable from these data: the output does not depend on it"
-        else:
-            message = (
-                f"the unknowns {', '.join(UNKNOWNS)} are not identifiable from these data: the "
-                "output depends on fewer combinations of them than there are unknowns (the "
-                "information matrix is singular)"
-            )
-    else:
-        for name, value, se in zip(UNKNOWNS, np.atleast_1d(k), np.atleast_1d(k_se), strict=True):
-            if se <= POORLY_DETERMINED * abs(value):
-                continue
-            share = f"{100 * se / abs(value) if value else math.inf:.3g} %"
-            found_.append(
-                f"{UNKNOWN} is poorly determined by these data: k_se = {se:.3g} is {share} of k "
-                "(the criterion is nearly flat in k); a longer record or a richer input (a PRBS, "
-                "a multisine) would help"
-                if SCALAR
-                else f"{name} is poorly determined by these data: its standard error {se:.3g} is "
-                f"{share} of its estimate {value:.6g} (the criterion is nearly flat along it); "
-                "a longer record or a richer input (a PRBS, a multisine) would help"
-            )
-    shares = np.diag(information) / np.diag(sum(part.free_information for part in parts))
-    share, which = float(np.min(shares)), UNKNOWNS[int(np.argmin(shares))]
-    if nuisances and not idle and 0 < share < 0.01:
-        found_.append(
-            f"the offset and initial state take {100 * (1 - share):.3g} % of the "
-            f"information about {which} (the input's response looks like theirs, as a step "
-            "at the first sample does); if the record starts at rest and without offset, fit "
-            "with offset=False, initial_state=False"
-        )
-    spread = math.sqrt(deviations / count)
-    clean = not math.sqrt(rss / count) > CLEAN * spread  # noise-free data (to their rounding)
-    if ok and not idle and _excitation(last_moments, Theta, k, clean) < EXCITATION:
-        found_.append(
-            "the input does not excite the system enough for this model: the moments of the "
-            f"filtered signals are singular to 1 part in {1 / EXCITATION:.0e}; a richer input "
-            "(a PRBS, a multisine) would determine k better"
-        )
-    if ok:
-        points = np.reshape(minima, (len(minima), len(UNKNOWNS)))
-        distance = np.abs(points - np.reshape(k, -1)).max(1)
-        for other in minima[distance > 1e-6 * max(float(np.max(np.abs(k))), 1e-300)]:
-            extra = records.residual_sum(Theta, other, settings) - rss
-            if extra < MARGIN * variance:
-                found_.append(
-                    f"another local minimum, {_named_point(other)}, fits the data "
-                    f"{'better' if extra < 0 else 'nearly as well'} (its residual sum of squares "
-                    f"differs from the estimate's by {extra / variance:+.3g} noise variances): the "
-                    "data cannot tell them apart; narrow the bounds or use a richer input"
-                )
-    if ok and not clean:  # (on exact data k_se measures rounding and interpolation alone)
-        found_ += _elsewhere(records, Theta, settings, k, k_se, bounds, rss, variance, others,
-                             minima, method)  # fmt: skip
-    if not deviations > 0:
-        found_.append(
-            "the output is constant: nothing in it responds to the input, so the estimate "
-            "means little and fit_percent (relative to the output's variation) is undefined "
-            "(NaN); check the output's column and the experiment"
-        )
-    if dof < 10:
-        found_.append(
-            f"only {count} samples for k and {count - dof - count_} nuisance parameter(s): the "
-            f"noise level and k_se rest on {dof} residual degree(s) of freedom and mean little"
-        )
-    a = np.trim_zeros((Theta @ _K(k))[n::-1], "f")
-    sizes = np.abs(np.roots(a)) if a.size > 1 else np.zeros(0)
-    sizes = sizes[sizes > 0]  # an integrator has no time constant
-    slowest = 1.0 / sizes.min() if sizes.size else 0.0
-    span = max(shape.span for shape in shapes)
-    if span < 0.5 * slowest:
-        found_.append(
-            f"the record is short: it spans {span:.3g}, under half the slowest time constant "
-            f"of the fitted model ({slowest:.3g}), so the data see little of its dynamics"
-        )
-    found_ += _box_warnings(k, bounds, found)
-    whiteness = sum(part.whiteness for part in parts)
-    lags = WHITENESS_LAGS * len(parts)
-    if ok and not clean and whiteness > lags + WHITENESS_LEVEL * math.sqrt(2 * lags):
-        found_.append(
-            f"the residuals are far from white (Ljung-Box Q = {whiteness:.3g} over {lags} lags, "
-            f"about {lags} if white): the model, the hold, an offset or the noise is not as "
-            "assumed, and k_se may be too small"
-        )
-    ci = (k - Z95 * k_se, k + Z95 * k_se)
-    return _issued(Fit(
-        k, k_se, ci if SCALAR else np.stack(ci, 1), ok=ok, message=message,
-        warnings=tuple(found_), fit_percent=fit_percent, residual_rms=math.sqrt(rss / count),
-        noise_std=math.sqrt(variance) if variance >= 0 else math.nan,
-        offsets=tuple(part.offset for part in parts),
-        fitted=tuple(part.fitted for part in parts) if keep else (),
-        residuals=tuple(part.residuals for part in parts) if keep else (),
-        covariance=covariance, **common,
-    ))  # fmt: skip
-
-
 def _box_warnings(k, bounds, found) -> list[str]:
-    """An estimate at a bound, and a global search that could not certify its minimum."""
+    """An estimate at a bound (the minimum may lie beyond it: ok is False), and a global
+    search that could not certify its minimum (`_uncertified`)."""
     said: list[str] = []
     for name, value, (lo, hi) in zip(UNKNOWNS, np.atleast_1d(k), np.reshape(bounds, (-1, 2)),
                                      strict=True):  # fmt: skip
@@ -3711,13 +4302,17 @@ def _box_warnings(k, bounds, found) -> list[str]:
                     f"{name} = {value:.6g} is at the {side} bound: the criterion's minimum may "
                     "lie outside the bounds"
                 )
+    return said
+
+
+def _uncertified(found) -> list[str]:
     if found is not None and not found.certified:
-        said.append(
+        return [
             "the global search could not prove, within its budget, that no point within the "
             "bounds fits better than the estimate (the criterion is nearly flat along some "
             "direction there): the estimate is the lowest minimum found"
-        )
-    return said
+        ]
+    return []
 
 
 def _unvalidated(shapes, keep: bool, offset: float, k, k_se: float, fields: dict) -> Fit:
@@ -3738,6 +4333,415 @@ def _issued(result: Fit) -> Fit:
     for text in result.warnings:
         warnings.warn(text, EstimationWarning, stacklevel=3)
     return result
+
+
+# The verdict: one fit's figures, the warnings a user can act on, and whether it is ok ------------
+#
+# Every method ends here with a _Summary of the records at its estimate. ok is False, with
+# the reason among the warnings, whenever a diagnostic contradicts the answer: the unknowns
+# not identifiable, a fit worse than the output's mean (fit % below 0), a point of lower
+# exact cost (the prediction error or, for "iv" and "ls", the output error with the
+# nuisances refitted) by more than MARGIN noise variances, a standard error larger than the
+# estimate, an unknown at its bound, or a record whose offset and initial state absorb so
+# much of the information about k that it is poorly determined.
+
+ABSORBED = 0.99  # the nuisances' share of the information about k beyond which it is named
+
+
+@dataclass(frozen=True)
+class _Summary:
+    """The records at the estimate: what the verdict judges and the Fit reports."""
+
+    k_se: object  # float, or a vector
+    covariance: np.ndarray
+    identifiable: bool
+    rss: float  # sum (y - y^)^2 over the records
+    variance: float  # the noise variance k_se rests on (the innovations' with a noise model)
+    count: int
+    dof: int
+    deviations: float  # sum (y - mean y)^2
+    shares: np.ndarray  # per unknown: the information left once the nuisances are removed
+    whiteness: float  # Ljung-Box Q of the residuals (the prediction errors with a noise model)
+    lags: int
+    offsets: tuple
+    fitted: tuple
+    residuals: tuple
+    states: tuple = ()
+    noise: NoiseModel | None = None
+    exact_cost: float = math.nan  # half the sum of squared prediction errors (method="pem")
+    independence: float = 0.0  # the prediction errors' correlation with the input ("pem")
+
+
+def _summary(Theta, parts, k, coefficients, method, count) -> _Summary:
+    """The _Summary of the instrumental-variable or least-squares fit from its records'
+    validation (`_validate`)."""
+    rss = sum(part.rss for part in parts)
+    dof = count - sum(part.nuisances for part in parts) - len(UNKNOWNS)
+    variance = rss / dof if dof > 0 else math.nan
+    information = sum(part.information for part in parts)  # matrices over the unknowns
+    if method == "iv":  # the output-error covariance (a sandwich, for the weights)
+        bread, meat = information, sum(part.spread for part in parts)
+    else:  # least squares: J'' around how the noise moves J'
+        bread, meat = _criterion_curvature(coefficients, k), sum(part.influence for part in parts)
+    inverse = np.linalg.pinv(bread)
+    covariance = variance * inverse @ meat @ inverse.T
+    variances = np.diag(covariance)
+    return _Summary(
+        k_se=np.sqrt(np.where(variances >= 0, variances, math.nan)), covariance=covariance,
+        identifiable=bool(np.all(np.linalg.eigvalsh(information) > 0)), rss=rss,
+        variance=variance, count=count, dof=dof,
+        deviations=sum(part.deviations for part in parts),
+        shares=np.diag(information) / np.diag(sum(part.free_information for part in parts)),
+        whiteness=sum(part.whiteness for part in parts), lags=WHITENESS_LAGS * len(parts),
+        offsets=tuple(part.offset for part in parts),
+        fitted=tuple(part.fitted for part in parts), residuals=tuple(part.residuals for part in parts),
+    )  # fmt: skip
+
+
+def _finish(Theta, records, shapes, k, coefficients, *, method, c, iterations, bounds, beta,
+            notes, automatic, settings, last_moments, keep, found=None, others=(),
+            uncertainty=True, summary=None, noise=None) -> Fit:  # fmt: skip
+    """The Fit: validation at k (or the exact fit's `summary`), uncertainty, warnings (issued
+    as EstimationWarning) and the verdict."""
+    nuisances = settings["offset"] or settings["initial_state"]
+    said, idle = _input_warnings(shapes, settings["hold"], nuisances)
+    found_ = list(notes) + said
+    if method == "ls":
+        step = _median_step(shapes)
+        found_ += (_auto_filter_warnings(step, min(shape.span for shape in shapes)) if automatic
+                   else _filter_warnings_at(c, step))  # fmt: skip
+    minima = _fit_minima(coefficients, bounds, found)
+    common = dict(method=method, iterations=iterations, minima=minima, coefficients=coefficients,
+                  bounds=bounds, filter=c, hold=settings["hold"], known=dict(settings["known"]))  # fmt: skip
+    if not np.all(np.isfinite(k)):
+        if not (coefficients[1:] != 0).any():
+            message = (
+                f"the data carry no information about {UNKNOWN or ', '.join(UNKNOWNS)}: the "
+                "criterion does not depend on k"
+            )
+        elif SCALAR:
+            message = "the criterion decreases without bound: bound the search with bounds=(lo, hi)"
+        else:
+            message = (
+                "the criterion has no local minimum within the bounds (it is flat along some "
+                "direction there): the data do not determine the unknowns"
+            )
+        none = math.nan if SCALAR else np.full(len(UNKNOWNS), math.nan)
+        return _unvalidated(shapes, keep, 0.0, none, math.inf,
+                            dict(ok=False, message=message, warnings=tuple(found_), **common))  # fmt: skip
+    if not uncertainty:  # the estimate alone, for speed: many records, or every few samples
+        said = _box_warnings(k, bounds, found)
+        message = (f"{method}: {_named_point(k)} (uncertainty=False: no standard error, no "
+                   "validation)")  # fmt: skip
+        offset = math.nan if settings["offset"] else 0.0  # (estimated in the validation)
+        common["noise"] = noise
+        return _unvalidated(shapes, keep, offset, k, math.nan,
+                            dict(ok=not said, message=message,
+                                 warnings=tuple(said + found_ + _uncertified(found)),
+                                 **common))  # fmt: skip
+    with np.errstate(all="ignore"):
+        if summary is None:
+            parts = records.validate(Theta, k, method, c, beta, settings, keep)
+            summary = _summary(Theta, parts, k, coefficients, method,
+                               sum(shape.samples for shape in shapes))  # fmt: skip
+    return _verdict(Theta, records, shapes, k, summary, found_=found_, idle=idle,
+                    nuisances=nuisances, bounds=bounds, found=found, minima=minima,
+                    settings=settings, others=others, last_moments=last_moments, keep=keep,
+                    common=common)  # fmt: skip
+
+
+def _verdict(Theta, records, shapes, k, summary: _Summary, *, found_, idle, nuisances, bounds,
+             found, minima, settings, others, last_moments, keep, common) -> Fit:  # fmt: skip
+    """Warnings, ok and the Fit from the summary of a fit at k."""
+    method, count_ = common["method"], len(UNKNOWNS)
+    k_se, rss, variance, dof = summary.k_se, summary.rss, summary.variance, summary.dof
+    contradictions: list[str] = []  # what makes ok False
+    with np.errstate(all="ignore"):
+        fit_percent = (100.0 * (1.0 - math.sqrt(rss / summary.deviations))
+                       if summary.deviations > 0 else math.nan)  # fmt: skip
+    ok = True
+    if SCALAR:
+        k_se = float(np.reshape(k_se, -1)[0])
+        message = f"{method}: k = {k:.6g} +- {k_se:.3g} (standard error)"
+    else:
+        message = f"{method}: " + ", ".join(
+            f"{name} = {value:.6g} +- {se:.3g}" for name, value, se in zip(UNKNOWNS, k, k_se, strict=True)
+        ) + " (standard errors)"
+    if not (summary.identifiable and np.all(np.isfinite(k_se))):
+        ok, k_se = False, (math.inf if SCALAR else np.full(count_, math.inf))
+        if SCALAR:
+            message = f"{UNKNOWN} is not identifiable from these data: the output does not depend on it"
+        else:
+            message = (
+                f"the unknowns {', '.join(UNKNOWNS)} are not identifiable from these data: the "
+                "output depends on fewer combinations of them than there are unknowns (the "
+                "information matrix is singular)"
+            )
+    else:
+        for name, value, se in zip(UNKNOWNS, np.atleast_1d(k), np.atleast_1d(k_se), strict=True):
+            if se <= POORLY_DETERMINED * abs(value):
+                continue
+            share = f"{100 * se / abs(value) if value else math.inf:.3g} %"
+            said = (
+                f"{UNKNOWN} is poorly determined by these data: k_se = {se:.3g} is {share} of k "
+                "(the criterion is nearly flat in k); a longer record or a richer input (a PRBS, "
+                "a multisine) would help"
+                if SCALAR
+                else f"{name} is poorly determined by these data: its standard error {se:.3g} is "
+                f"{share} of its estimate {value:.6g} (the criterion is nearly flat along it); "
+                "a longer record or a richer input (a PRBS, a multisine) would help"
+            )
+            (contradictions if se > abs(value) else found_).append(said)
+    with np.errstate(all="ignore"):
+        shares = np.where(np.isfinite(summary.shares), summary.shares, 1.0)
+    which = int(np.argmin(shares))
+    share = float(shares[which])
+    se_which = float(np.reshape(k_se, -1)[which])
+    value_which = float(np.reshape(k, -1)[which])
+    if nuisances and not idle and 0 < share < 1 - ABSORBED:
+        poor = not se_which <= POORLY_DETERMINED * abs(value_which)
+        (contradictions if poor else found_).append(
+            f"the offset and initial state take {_share_text(1 - share)} of the information "
+            f"about {UNKNOWNS[which]} (the input's response looks like theirs, as a step at the "
+            "first sample does)"
+            + ("; what is left determines it poorly" if poor else "")
+            + "; if the record starts at rest and without offset, fit with offset=False, "
+            "initial_state=False"
+        )
+    spread = math.sqrt(summary.deviations / summary.count)
+    clean = not math.sqrt(rss / summary.count) > CLEAN * spread  # noise-free data (to rounding)
+    if ok and not idle and _excitation(last_moments, Theta, k, clean) < EXCITATION:
+        found_.append(
+            "the input does not excite the system enough for this model: the moments of the "
+            f"filtered signals are singular to 1 part in {1 / EXCITATION:.0e}; a richer input "
+            "(a PRBS, a multisine) would determine k better"
+        )
+    if ok and method != "pem":
+        found_ += _other_minima(Theta, records, settings, k, minima, rss, variance)
+    if ok and method != "pem":  # (on exact data only a better point: k_se measures rounding)
+        better = _elsewhere(records, Theta, settings, k, np.reshape(k_se, -1), bounds, rss,
+                            variance, others, minima, method)  # fmt: skip
+        for extra, text in better:
+            if extra < -MARGIN * variance:
+                contradictions.append(text)
+            elif not clean:
+                found_.append(text)
+    if not summary.deviations > 0:
+        found_.append(
+            "the output is constant: nothing in it responds to the input, so the estimate "
+            "means little and fit_percent (relative to the output's variation) is undefined "
+            "(NaN); check the output's column and the experiment"
+        )
+    elif fit_percent < 0:
+        contradictions.append(
+            f"the fit is {fit_percent:.4g} %: the model's output is further from the data than "
+            "their mean; the model, the hold, the records or the settings are not as assumed"
+        )
+    if dof < 10:
+        found_.append(
+            f"only {summary.count} samples for k and {summary.count - dof - count_} other "
+            f"parameter(s): the noise level and k_se rest on {dof} residual degree(s) of "
+            "freedom and mean little"
+        )
+    found_ += _short_record(Theta, k, shapes)
+    contradictions += _box_warnings(k, bounds, found)
+    found_ += _uncertified(found)
+    whiteness, lags = summary.whiteness, summary.lags
+    if ok and not clean and whiteness > lags + WHITENESS_LEVEL * math.sqrt(2 * lags):
+        whitened = summary.noise is not None and summary.noise.orders != (0, 0)
+        found_.append(
+            f"the {'prediction errors (whitened residuals)' if whitened else 'residuals'} are "
+            f"far from white (Ljung-Box Q = {whiteness:.3g} over {lags} lags, about {lags} if "
+            "white): the model, the hold, an offset or the noise is not as assumed"
+            + ("" if method != "pem" or summary.noise is None else
+               f" (noise model {summary.noise.kind}; noise='auto' chooses its orders)")
+            + ", and k_se may be too small"
+        )  # fmt: skip
+    if ok and not clean and summary.independence > lags + WHITENESS_LEVEL * math.sqrt(2 * lags):
+        found_.append(
+            f"the prediction errors are correlated with the input (chi-square "
+            f"{summary.independence:.3g} over {lags} lags, about {lags} if the model is right): "
+            "the model does not explain how the output answers the input (a wrong model, "
+            "hold, input-output delay, offset or initial state), and k_se may be too small"
+        )
+    if ok and contradictions:
+        ok = False
+        message = f"{message}, contradicted: {contradictions[0]}"
+    ci = (k - Z95 * k_se, k + Z95 * k_se)
+    return _issued(Fit(
+        k, k_se, ci if SCALAR else np.stack(ci, 1), ok=ok, message=message,
+        warnings=tuple(contradictions + found_), fit_percent=fit_percent,
+        residual_rms=math.sqrt(rss / summary.count),
+        noise_std=math.sqrt(rss / dof) if dof > 0 else math.nan, offsets=summary.offsets,
+        fitted=summary.fitted if keep else (), residuals=summary.residuals if keep else (),
+        covariance=summary.covariance, noise=summary.noise, states=summary.states,
+        exact_cost=summary.exact_cost, absorbed=1.0 - share if nuisances else 0.0, **common,
+    ))  # fmt: skip
+
+
+def _other_minima(Theta, records, settings, k, minima, rss, variance) -> list[str]:
+    """The criterion's other local minima that fit the data nearly as well (output error)."""
+    said = []
+    points = np.reshape(minima, (len(minima), len(UNKNOWNS)))
+    distance = np.abs(points - np.reshape(k, -1)).max(1)
+    for other in minima[distance > 1e-6 * max(float(np.max(np.abs(k))), 1e-300)]:
+        extra = records.residual_sum(Theta, other, settings) - rss
+        if extra < MARGIN * variance:
+            said.append(
+                f"another local minimum, {_named_point(other)}, fits the data "
+                f"{'better' if extra < 0 else 'nearly as well'} (its residual sum of squares "
+                f"differs from the estimate's by {extra / variance:+.3g} noise variances): the "
+                "data cannot tell them apart; narrow the bounds or use a richer input"
+            )
+    return said
+
+
+def _short_record(Theta, k, shapes) -> list[str]:
+    a = np.trim_zeros((Theta @ _K(k))[n::-1], "f")
+    sizes = np.abs(np.roots(a)) if a.size > 1 else np.zeros(0)
+    sizes = sizes[sizes > 0]  # an integrator has no time constant
+    slowest = 1.0 / sizes.min() if sizes.size else 0.0
+    span = max(shape.span for shape in shapes)
+    if span < 0.5 * slowest:
+        return [
+            f"the record is short: it spans {span:.3g}, under half the slowest time constant "
+            f"of the fitted model ({slowest:.3g}), so the data see little of its dynamics"
+        ]
+    return []
+
+
+def _share_text(fraction: float) -> str:
+    """A share close to 1 with the digits that tell it from 1 (99.998 %, not 100 %)."""
+    digits = max(4, 2 - math.floor(math.log10(max(1 - fraction, 1e-12))))
+    return f"{100 * fraction:.{min(digits, 12)}g} %"
+
+
+# The exact fit's driver: its starts, its noise model and its summary ----------------------------
+
+SAME_END = 1e-6  # two ends of the descent this close (relative) are one minimum
+
+
+def _distinct(points: list, point) -> bool:
+    point = np.atleast_1d(np.asarray(point, dtype=float))
+    return all(
+        np.max(np.abs(point - np.atleast_1d(other)) / np.maximum(np.abs(point), 1e-300)) > SAME_END
+        for other in points
+    )  # fmt: skip
+
+
+def _starts(k_ls, coefficients, bounds, found, k0) -> list:
+    """(label, point) of each start of the exact descent: the polynomial cost's global
+    minimiser, its other local minima within the bounds, and k0; each once, finite."""
+    starts = [("the least-squares estimate", k_ls)]
+    starts += [("a local minimum of the least-squares cost", point)
+               for point in _fit_minima(coefficients, bounds, found)]  # fmt: skip
+    if k0 is not None:
+        starts.append(("k0", k0))
+    chosen, points = [], []
+    for label, point in starts:
+        if np.all(np.isfinite(point)) and _distinct(points, point):
+            chosen.append((label, float(point) if SCALAR else np.asarray(point, dtype=float)))
+            points.append(point)
+    return chosen
+
+
+def _exact_fit(Theta, records, shapes, k_ls, coefficients, total, found, *, c, k0, bounds,
+               noise: str, settings, keep: bool, uncertainty: bool, automatic: bool) -> Fit:  # fmt: skip
+    """method="pem": descents of the output error from every start (`_starts`; the model
+    file's values where every start makes G(s, k) unstable), the lowest end refined with the
+    noise model chosen there, and the Fit at it."""
+    count = sum(shape.samples for shape in shapes)
+    ends, notes = [], []
+    box = np.reshape(bounds, (-1, 2))
+    reached = []  # (k, rss, covariance) of the minima found
+    starts = _starts(k_ls, coefficients, bounds, found, k0)
+    model = _model_point()  # the last resort, where every start is unstable
+    common = dict(c=c, bounds=bounds, beta=0.0, automatic=automatic, settings=settings,
+                  last_moments=total, keep=keep, found=found, uncertainty=uncertainty)  # fmt: skip
+    if not starts:  # the polynomial has no minimum: its verdict (`_finish` says why)
+        return _finish(Theta, records, shapes, k_ls, coefficients, method="pem", iterations=0,
+                       notes=notes, **common)  # fmt: skip
+    for label, start in starts + ([] if model is None else [("the model file's value", model)]):
+        if ends and label == "the model file's value":
+            break
+        start = np.clip(start, box[:, 0], box[:, 1]) if not SCALAR else float(np.clip(start, *box[0]))
+        k, _, rss, steps = _gauss_newton(Theta, records, start, WHITE, bounds, settings, count,
+                                         keep, reached)  # fmt: skip
+        if math.isfinite(rss):
+            ends.append((rss, label, k, steps))
+            gram = _total(records.prediction(Theta, k, WHITE.filters, settings, True, keep))[1]
+            if gram is not None:
+                covariance = rss / count * np.linalg.pinv(gram)[: len(UNKNOWNS), : len(UNKNOWNS)]
+                reached.append((k, rss, covariance))
+    if not ends:
+        none = math.nan if SCALAR else np.full(len(UNKNOWNS), math.nan)
+        notes.append("no start of the exact descent gives a finite prediction error (G(s, k) is "
+                     "unstable or has no realisation there): no estimate; give bounds where "
+                     "the model is stable, or k0")  # fmt: skip
+        return _finish(Theta, records, shapes, none, coefficients, method="pem", iterations=0,
+                       notes=notes, **common)  # fmt: skip
+    ends.sort(key=lambda end: end[0])
+    rss, label, k, iterations = ends[0]
+    first, last = _nuisance_needs(settings["offset"], settings["initial_state"])
+    dof = max(count - len(shapes) * max(last - first + 1, 0) - len(UNKNOWNS), 1)
+    deviations = sum(part.deviations for part in records.prediction(Theta, k, WHITE.filters,
+                                                                     settings, True, keep))  # fmt: skip
+    tie = MARGIN * max(rss / dof, CLEAN**2 * deviations / count)  # (noise-free: rounding)
+    seen = [k]
+    for other, other_label, point, _ in ends[1:]:
+        if _distinct(seen, point) and other - rss < tie:
+            seen.append(point)
+            notes.append(
+                f"another local minimum of the prediction error, {_named_point(point)} (from "
+                f"{other_label}), fits the data nearly as well (its residual sum of squares "
+                f"differs from the estimate's by {(other - rss) / (rss / dof):+.3g} noise "
+                "variances): the data cannot tell them apart; narrow the bounds or use a "
+                "richer input"
+            )
+    chosen = WHITE
+    if noise != "white" and rss > CLEAN**2 * deviations:  # (noise-free data: no noise model)
+        chosen = _choose_noise(Theta, records, k, noise, settings, count)
+        if chosen.orders != (0, 0):
+            k, chosen, rss, more = _gauss_newton(Theta, records, k, chosen, bounds, settings, count, keep)
+            iterations += more
+    if not uncertainty:
+        return _finish(Theta, records, shapes, k, coefficients, method="pem",
+                       iterations=iterations, notes=notes, noise=chosen, **common)  # fmt: skip
+    parts = records.prediction(Theta, k, chosen.filters, settings, True, keep)
+    summary = _exact_summary(parts, chosen, count)
+    return _finish(Theta, records, shapes, k, coefficients, method="pem", iterations=iterations,
+                   notes=notes, summary=summary, **common)  # fmt: skip
+
+
+def _exact_summary(parts: list[_Prediction], noise: NoiseModel, count: int) -> _Summary:
+    """The _Summary at the exact fit's estimate: the covariance of k from the joint
+    prediction-error information (k and the noise coefficients; the nuisances projected
+    out), scaled by the prediction errors' variance."""
+    rss, gram, _ = _total(parts)
+    p = len(UNKNOWNS)
+    dof = count - sum(part.nuisances for part in parts) - p - sum(noise.orders)
+    variance = rss / dof if dof > 0 else math.nan
+    with np.errstate(all="ignore"):
+        scale = np.sqrt(np.maximum(np.diag(gram), 1e-300))
+        scaled = gram / np.outer(scale, scale)  # (an unknown of another size: its own scale)
+        values = np.linalg.eigvalsh(scaled)
+        covariance = variance * (np.linalg.pinv(scaled) / np.outer(scale, scale))[:p, :p]
+        variances = np.diag(covariance)
+        free = np.diag(sum(part.free for part in parts))
+    return _Summary(
+        k_se=np.sqrt(np.where(variances >= 0, variances, math.nan)), covariance=covariance,
+        identifiable=bool(values.min() > ROUNDING * values.max() and np.all(np.diag(gram)[:p] > 0)),
+        rss=sum(part.output_rss for part in parts), variance=variance, count=count, dof=dof,
+        deviations=sum(part.deviations for part in parts),
+        shares=np.diag(gram)[:p] / free, whiteness=sum(part.whiteness for part in parts),
+        lags=WHITENESS_LAGS * len(parts),
+        independence=sum(part.independence for part in parts), offsets=tuple(part.offset for part in parts),
+        fitted=tuple(part.fitted for part in parts),
+        residuals=tuple(part.residuals for part in parts),
+        states=tuple(part.state for part in parts),
+        noise=replace(noise, std=math.sqrt(variance) if variance >= 0 else math.nan),
+        exact_cost=0.5 * rss,
+    )  # fmt: skip
 
 
 # Streaming: the estimate of a live data stream ------------------------------------------------
@@ -3767,11 +4771,28 @@ class Tracker:
 
     def update(self, t, u, y):
         """Take the next sample(s) (numbers, or equal-length arrays, after the last) and
-        return the current estimate k^ (several unknowns: a vector)."""
+        return the current estimate k^ (several unknowns: a vector).
+
+        Samples that are refused (a ValueError that says why: not after the last, not
+        finite, beyond floating point's range) leave the Tracker as it was: one bad sample
+        does not stop a stream."""
         run = self._run
         sample = _sample(t, u, y, after=run.t)  # one sample as numbers: the common case
-        if sample is None or not run._one(*sample):
-            run.advance(*_signals(("t", t), ("u", u), ("y", y), minimum=1, after=run.t))
+        if sample is None or not run._one(*sample):  # (_one changes nothing unless it succeeds)
+            arrays = _signals(("t", t), ("u", u), ("y", y), minimum=1, after=run.t)
+            kept = dict(vars(run), cache=dict(run.cache))
+            try:
+                run.advance(*arrays)
+                if not (np.isfinite(run.P).all() and math.isfinite(run.log_scale)
+                        and np.isfinite(run.khat).all()):  # fmt: skip
+                    raise ValueError(
+                        f"the samples from t = {arrays[0][0]:g} leave floating point's range in "
+                        "the estimator's sums: refused (are the times in the model's unit?)"
+                    )
+            except BaseException:
+                vars(run).clear()
+                vars(run).update(kept)
+                raise
         self._global = None
         return self.k
 
@@ -3817,28 +4838,80 @@ class Tracker:
         return None if run.informed >= run.t else float(run.informed)
 
 
-# From the command line: python THIS_FILE fit|estimate data.csv ... ------------------------------
+# Data files: CSV records, read as untrusted input -------------------------------------------
 
+MAX_CSV_BYTES = 1 << 30  # a CSV file: ten million samples of three numbers fit
+MAX_CSV_LINE = 1 << 16  # characters in one line (a row, or the header)
 _NUMBER = re.compile(r"[+-]?(?:[0-9]+\.?[0-9]*|\.[0-9]+)(?:[eE][+-]?[0-9]+)?")
-# argparse takes "-1e-3", "-inf" or "-1:0" for an option (it knows only -1 and -.5 as
-# numbers): they are values here, as no option starts with a digit, ".", inf or nan
-_NEGATIVE_NUMBER = re.compile(r"-(?:\.?[0-9]|inf|nan)", re.IGNORECASE)
-# the functions' advice names their arguments (hold='zoh'); here it names the options
-_COMMAND_LINE_ADVICE = (('offset=False, initial_state=False', '--no-offset --no-initial-state'), ("hold='zoh'", '--hold zoh'), ("hold='linear'", '--hold linear'), ("C='auto'", '--filter auto'), ("method='iv'", '--method iv'), ("engine='ode'", '--engine ode'), ("engine='moments'", '--engine moments'), ('bounds=(lo, hi)', '--bounds LO:HI'), ('with bounds=', 'with --bounds'), ('lower S0 (prior_weight sets one', 'lower --S0 (--S0-relative sets one'))
 
 
-def _for_command_line(text: str) -> str:
-    for python, option in _COMMAND_LINE_ADVICE:
-        text = text.replace(python, option)
-    return text
+class CSVError(ValueError):
+    """A data file that cannot be read as a record: `path`, and `line` (from 1) when the
+    problem is at one line of it (the message starts with PATH:LINE); `kind` "io" when the
+    file cannot be read at all, "bad_data" for its content."""
+
+    def __init__(self, path, line: int | None, message: str, kind: str = "bad_data"):
+        super().__init__(f"{path}:{line}: {message}" if line else f"{path}: {message}")
+        self.path, self.line, self.kind = os.fspath(path), line, kind
+
+
+def _open_csv(path):
+    """A CSV file opened as UTF-8 text (a byte-order mark read as nothing), when it is a
+    regular file of at most MAX_CSV_BYTES: a directory, a pipe, a device or anything under
+    /proc, /sys or /dev would fail or never end."""
+    try:
+        name = os.fspath(path)
+        real = os.path.realpath(name)
+        if any(real == root or real.startswith(root + "/") for root in ("/proc", "/sys", "/dev")):
+            raise CSVError(path, None, f"a system file ({real}), not a CSV file", "io")
+        handle = os.open(name, os.O_RDONLY | getattr(os, "O_NONBLOCK", 0))
+    except OSError as error:
+        raise CSVError(path, None, error.strerror, "io") from None
+    except TypeError:
+        raise TypeError(f"path must be a file name, not {path!r}") from None
+    try:
+        info = os.fstat(handle)
+        if stat.S_ISDIR(info.st_mode):
+            raise CSVError(path, None, "a directory, not a CSV file", "io")
+        if not stat.S_ISREG(info.st_mode):
+            raise CSVError(path, None, "not a regular file (a pipe or a device)", "io")
+        if info.st_size > MAX_CSV_BYTES:
+            raise CSVError(path, None, f"larger than {MAX_CSV_BYTES} bytes (a limit)", "io")
+        os.set_blocking(handle, True)
+        return open(handle, encoding="utf-8-sig", newline="")
+    except BaseException:
+        os.close(handle)
+        raise
+
+
+def _csv_lines(file, path, commas: int | None = None):
+    """The file's lines, read one at a time, each at most MAX_CSV_LINE characters; with
+    `commas`, each must hold that many (else `_Irregular`: a row to look at closely)."""
+    number = 0
+    while True:
+        line = file.readline(MAX_CSV_LINE + 1)
+        if not line:
+            return
+        number += 1
+        if len(line) > MAX_CSV_LINE and line[-1] not in "\r\n":
+            raise CSVError(path, number, f"a line longer than {MAX_CSV_LINE} characters")
+        if commas is not None and line.count(",") != commas and line.strip():
+            raise _Irregular
+        yield line
+
+
+class _Irregular(Exception):
+    """A row the fast reader leaves to the checked one."""
 
 
 def read_csv(path, columns: tuple[str, ...] = ("t", "u", "y")) -> tuple[np.ndarray, ...]:
     """The named columns of a CSV file with a header row, as float arrays, in that order.
 
-    A UTF-8 byte-order mark is read as nothing; every value must be a finite decimal number
-    (no "1_0", "nan" or "inf"); any other content is a ValueError naming the file, its line
-    and the column.
+    A UTF-8 byte-order mark is read as nothing; every row must have the header's number of
+    values, and every value read must be a finite decimal number (no "1_0", "nan" or
+    "inf"). Anything else, a file that is not a regular file of at most MAX_CSV_BYTES, or a
+    line longer than MAX_CSV_LINE characters, is a CSVError (a ValueError) naming the
+    file, and the line where there is one. The file is read as a stream, a line at a time.
     """
     fast = _read_plain_csv(path, columns)
     return fast if fast is not None else _read_csv_checked(path, columns)
@@ -3849,18 +4922,19 @@ def _read_plain_csv(path, columns: tuple[str, ...]) -> tuple[np.ndarray, ...] | 
     the checked reader, the same values to the bit); None for anything else (the checked
     reader then says what is wrong)."""
     try:
-        with open(path, encoding="utf-8-sig", newline="") as file:
-            header = file.readline()
-            if "\"" in header or "\r" in header.rstrip("\r\n"):
+        with _open_csv(path) as file:
+            header = file.readline(MAX_CSV_LINE + 1)
+            if "\"" in header or "\r" in header.rstrip("\r\n") or len(header) > MAX_CSV_LINE:
                 return None
             names = [name.strip() for name in header.rstrip("\r\n").split(",")]
             if len(set(names)) < len(names) or not set(columns) <= set(names):
                 return None
             with warnings.catch_warnings():
                 warnings.simplefilter("error")  # an empty file after the header warns
-                values = np.loadtxt(file, delimiter=",", usecols=[names.index(c) for c in columns],
-                                    ndmin=2, comments=None, encoding=None)  # fmt: skip
-    except (OSError, ValueError, UnicodeDecodeError, UserWarning):
+                values = np.loadtxt(_csv_lines(file, path, commas=len(names) - 1), delimiter=",",
+                                    usecols=[names.index(c) for c in columns], ndmin=2,
+                                    comments=None, encoding=None)  # fmt: skip
+    except (OSError, ValueError, UnicodeDecodeError, UserWarning, _Irregular):
         return None
     if values.shape[0] == 0 or not np.isfinite(values).all():
         return None  # (nan, inf and overflowing numbers are the checked reader's to name)
@@ -3869,39 +4943,70 @@ def _read_plain_csv(path, columns: tuple[str, ...]) -> tuple[np.ndarray, ...] | 
 
 def _read_csv_checked(path, columns: tuple[str, ...]) -> tuple[np.ndarray, ...]:
     """read_csv, cell by cell: every problem named with its file, line and column."""
-    try:
-        with open(path, newline="", encoding="utf-8-sig") as file:
-            rows = [(line, row) for line, row in enumerate(csv.reader(file), start=1)
-                    if any(cell.strip() for cell in row)]  # fmt: skip
-    except UnicodeDecodeError as error:
-        raise ValueError(f"{path}: not UTF-8 text (byte {error.start}: {error.reason})") from None
-    except csv.Error as error:
-        raise ValueError(f"{path}: not a CSV file: {error}") from None
+    with _open_csv(path) as file:
+        try:
+            reader = csv.reader(_csv_lines(file, path))
+            rows = _csv_rows(reader, path, columns)
+        except UnicodeDecodeError as error:
+            raise CSVError(path, None, f"not UTF-8 text (byte {error.start}: {error.reason})") from None
+        except csv.Error as error:
+            raise CSVError(path, reader.line_num or None, f"not a CSV file: {error}") from None
     if not rows:
+        raise CSVError(path, None, "no data: the file has a header row and nothing after it")
+    return tuple(np.array(rows).reshape(-1, len(columns)).T)
+
+
+def _csv_rows(reader, path, columns: tuple[str, ...]) -> list[list[float]]:
+    """The rows' values of `columns`, checked as they are read (blank rows skipped)."""
+    header, index, rows = None, None, []
+    for row in reader:
+        if not any(cell.strip() for cell in row):
+            continue
+        line = reader.line_num
+        if header is None:
+            header = [name.strip() for name in row]
+            repeated = sorted({name for name in header if header.count(name) > 1})
+            if repeated:
+                raise CSVError(path, line, f"the header names the column {repeated[0]!r} twice")
+            missing = [name for name in columns if name not in header]
+            if missing:
+                named = ", ".join(header)
+                raise CSVError(path, line, f"no column {missing[0]!r} (the header names {named})")
+            index = [header.index(name) for name in columns]
+            continue
+        if len(row) != len(header):
+            raise CSVError(
+                path, line, f"{len(row)} values where the header names {len(header)} columns"
+            )
+        values = []
+        for name, i in zip(columns, index, strict=True):
+            cell = row[i].strip()
+            if not _NUMBER.fullmatch(cell):
+                raise CSVError(path, line, f"column {name!r} holds {cell[:20]!r}, not a number")
+            value = float(cell)
+            if not math.isfinite(value):
+                raise CSVError(path, line, f"column {name!r}: {cell[:20]} is out of range")
+            values.append(value)
+        rows.append(values)
+    if header is None:
         expected = ", ".join(columns)
-        raise ValueError(f"{path}: the file is empty; expected a header row naming {expected}")
-    header = [name.strip() for name in rows[0][1]]
-    repeated = sorted({name for name in header if header.count(name) > 1})
-    if repeated:
-        raise ValueError(f"{path}:{rows[0][0]}: the header names the column {repeated[0]!r} twice")
-    missing = [name for name in columns if name not in header]
-    if missing:
-        named = ", ".join(header)
-        raise ValueError(f"{path}:{rows[0][0]}: no column {missing[0]!r} (the header names {named})")
-    if len(rows) == 1:
-        raise ValueError(f"{path}: no data: the file has a header row and nothing after it")
-    index = [header.index(name) for name in columns]
-    values = np.empty((len(rows) - 1, len(columns)))
-    for row_number, (line, row) in enumerate(rows[1:]):
-        for j, (name, i) in enumerate(zip(columns, index, strict=True)):
-            cell = row[i].strip() if i < len(row) else None
-            if cell is None or not _NUMBER.fullmatch(cell):
-                found = f"has {len(row)} values" if cell is None else f"holds {cell[:20]!r}"
-                raise ValueError(f"{path}:{line}: column {name!r} {found}, not a number")
-            values[row_number, j] = float(cell)
-            if not math.isfinite(values[row_number, j]):
-                raise ValueError(f"{path}:{line}: column {name!r}: {cell} is out of range")
-    return tuple(values.T)
+        raise CSVError(path, None, f"the file is empty; expected a header row naming {expected}")
+    return rows
+
+
+# From the command line: python THIS_FILE fit|estimate data.csv ... ------------------------------
+
+# argparse takes "-1e-3", "-inf" or "-1:0" for an option (it knows only -1 and -.5 as
+# numbers): they are values here, as no option starts with a digit, ".", inf or nan
+_NEGATIVE_NUMBER = re.compile(r"-(?:\.?[0-9]|inf|nan)", re.IGNORECASE)
+# the functions' advice names their arguments (hold='zoh'); here it names the options
+_COMMAND_LINE_ADVICE = (('offset=False, initial_state=False', '--no-offset --no-initial-state'), ("hold='zoh'", '--hold zoh'), ("hold='linear'", '--hold linear'), ("C='auto'", '--filter auto'), ("method='iv'", '--method iv'), ("method='pem'", '--method pem'), ("method='ls'", '--method ls'), ("noise='auto'", '--noise auto'), ("engine='ode'", '--engine ode'), ("engine='moments'", '--engine moments'), ('bounds=(lo, hi)', '--bounds LO:HI'), ('with bounds=', 'with --bounds'), ('lower S0 (prior_weight sets one', 'lower --S0 (--S0-relative sets one'))
+
+
+def _for_command_line(text: str) -> str:
+    for python, option in _COMMAND_LINE_ADVICE:
+        text = text.replace(python, option)
+    return text
 
 
 def _assignment(text: str) -> tuple[str, float]:
@@ -3963,14 +5068,17 @@ def _parser() -> argparse.ArgumentParser:
     commands = parser.add_subparsers(dest="command", required=True)
     fit_ = commands.add_parser("fit", help="fit k to whole records (several add)")
     fit_.add_argument("data", nargs="+", help="CSV file(s), one per experiment")
-    fit_.add_argument("--method", choices=FIT_METHODS, default="iv", help="iv (default) or ls")
+    fit_.add_argument("--method", choices=FIT_METHODS, default="pem",
+                      help="pem (the exact prediction error, default), iv or ls")  # fmt: skip
+    fit_.add_argument("--noise", choices=NOISE_MODELS, default="auto",
+                      help="pem's noise model: auto (default), white, ar or arma")  # fmt: skip
     fit_.add_argument("--k0", metavar="V|NAME=V,...",
                       help="start of the iterations (default: least squares)")  # fmt: skip
     fit_.add_argument("--offset", action=argparse.BooleanOptionalAction, default=True,
                       help="estimate an output offset (default on)")  # fmt: skip
     fit_.add_argument("--initial-state", action=argparse.BooleanOptionalAction, default=True,
                       help="allow a non-zero initial state (default on)")  # fmt: skip
-    fit_.add_argument("--beta", type=float, default=0.0, help="forgetting factor (0)")
+    fit_.add_argument("--beta", type=float, default=0.0, help="iv and ls: forgetting factor (0)")
     fit_.add_argument("--validate", action="append", default=[], metavar="FILE",
                       help="a CSV record to validate the fitted model on, its initial state and "
                       "offset estimated (repeat for more)")  # fmt: skip
@@ -4014,7 +5122,8 @@ def _fit_main(args, known) -> tuple[dict, list[str], int]:
     columns = _column_names(args.columns)
     records = [read_csv(path, columns) for path in args.data]
     data = [list(part) for part in zip(*records, strict=True)] if len(records) > 1 else records[0]
-    result = fit(*data, method=args.method, C=_filter_option(args), k0=_point_option(args.k0),
+    result = fit(*data, method=args.method, noise=args.noise, C=_filter_option(args),
+                 k0=_point_option(args.k0),
                  bounds=_bounds_option(args.bounds), offset=args.offset,
                  initial_state=args.initial_state, hold=args.hold, beta=args.beta, **known)  # fmt: skip
     record = fit_record(result)
@@ -4030,6 +5139,9 @@ def _fit_main(args, known) -> tuple[dict, list[str], int]:
             for name, value, se, (lo, hi) in zip(UNKNOWNS, result.k, result.k_se, result.ci,
                                                  strict=True)  # fmt: skip
         ] + [quality]
+    if result.noise is not None:
+        lines.append(f"noise model {result.noise.kind}: D {_plain(result.noise.ar)}, "
+                     f"C {_plain(result.noise.ma)}, innovations std {result.noise.std:.3g}")  # fmt: skip
     if not result.ok:
         lines.append(f"  {result.message}")
     if args.validate and np.all(np.isfinite(result.k)):
@@ -4053,7 +5165,9 @@ def fit_record(result: Fit) -> dict:
         minima=_plain(result.minima), minima_costs=_plain(result.cost(result.minima)),
         iterations=result.iterations, method=result.method,
         offsets=[_plain(v) for v in result.offsets], filter=_plain(result.filter),
-        message=result.message,
+        message=result.message, noise=None if result.noise is None else result.noise.record(),
+        initial_states=[_plain(state) for state in result.states],
+        exact_cost=_plain(result.exact_cost), absorbed=_plain(result.absorbed),
     )  # fmt: skip
 
 
@@ -4120,7 +5234,9 @@ def main(argv: list[str] | None = None) -> int:
         if isinstance(error, OSError) and error.filename:
             text = f"{error.filename}: {error.strerror}"
         if args.json:  # the record of `mtt fit/estimate --json` when they fail
-            record = dict(file=None, kind="usage", line=None, column=None, message=text,
+            data = isinstance(error, CSVError)
+            record = dict(file=error.path if data else None, kind=error.kind if data else "usage",
+                          line=error.line if data else None, column=None, message=text,
                           notes=[])  # fmt: skip
             print(json.dumps(dict(ok=False, model=MODEL, unknown=UNKNOWN, unknowns=list(UNKNOWNS),
                                   errors=[record])))  # fmt: skip
