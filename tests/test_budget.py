@@ -179,3 +179,38 @@ def test_a_product_stops_when_it_outgrows_the_budget_and_a_division_is_charged()
     meter = Meter(Budget(max_terms=10**4), "test")
     exact_quotient(product(a, b, meter), b, meter)
     assert meter.work == 900 + 4 * 30 * 30  # the quotient's 30 terms, each times b's 30
+
+
+def wheatstone() -> str:
+    """A bridge of symbolic resistances (an algebraic loop) fed through the unknown k, a
+    capacitance across its output."""
+    lines = ["model wheatstone", "unknown k", *(f"param r{i}" for i in range(1, 6)), "param cap"]
+    lines += ["Se:v -> 1:in", "1:in -> R:rin(k)", "1:in -> 0:a"]
+    for name, a, b in (("r1", "a", "b"), ("r2", "a", "c"), ("r5", "b", "c")):
+        lines += [f"0:{a} -> 1:j{name}", f"1:j{name} -> 0:{b}", f"1:j{name} -> R:{name}({name})"]
+    lines += ["0:b -> R:r3(r3)", "0:c -> R:r4(r4)", "0:c -> C:cap(cap)", "0:c -> De:out"]
+    return "\n".join(lines) + "\n"
+
+
+def test_a_loop_too_large_to_tear_is_left_to_the_elimination_with_the_same_result():
+    """The bridge's loop torn within the budget, or (a budget too small for the tearing)
+    kept as algebraic rows of the descriptor form: the same transfer function, that of
+    nodal analysis."""
+    torn, kept = mtt.load(wheatstone()), mtt.load(wheatstone(), max_terms=40)
+    assert len(kept.state_space.states) > len(torn.state_space.states) == 1
+    s, k, cap = sympy.symbols("s k cap")
+    r = sympy.symbols("r1:6")
+    g = [1 / x for x in r]  # nodal analysis: conductances, the input 1 through k
+    nodes = sympy.Matrix(
+        [
+            [1 / k + g[0] + g[1], -g[0], -g[1]],
+            [-g[0], g[0] + g[2] + g[4], -g[4]],
+            [-g[1], -g[4], g[1] + g[3] + g[4] + cap * s],
+        ]
+    )
+    output = nodes.copy()
+    output[:, 2] = sympy.Matrix([1 / k, 0, 0])  # Cramer's rule for the output node
+    num, den = sympy.fraction(sympy.together(output.det() / nodes.det()))
+    for model in (torn, kept):
+        tf = model.transfer_function
+        assert sympy.expand(tf.num * den - tf.den * num) == 0

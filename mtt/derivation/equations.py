@@ -23,7 +23,7 @@ from sympy.polys.domains.domain import Domain
 from sympy.polys.matrices import DomainMatrix
 
 from mtt.derivation import deadline
-from mtt.derivation.budget import DEFAULT_BUDGET, Budget
+from mtt.derivation.budget import DEFAULT_BUDGET, Budget, Meter, TooLarge, refusal
 from mtt.derivation.causality import CausalBondGraph
 from mtt.derivation.constants import Constants, Unsupported
 from mtt.derivation.forms import Form, eliminate, solve, substitute
@@ -223,9 +223,13 @@ def derive(
         extra += free
         constraints += left
 
-    resolved, free, left = eliminate(explicit, K)
-    extra += free
-    constraints = [substitute(form, resolved, K) for form in constraints] + left
+    meter = Meter(budget, "algebraic loops")
+    try:
+        resolved, free, left = eliminate(explicit, K, meter)
+        extra += free
+        constraints = [substitute(form, resolved, K, meter=meter) for form in constraints] + left
+    except TooLarge as stop:
+        raise refusal(graph, parametrisation.free, stop) from None
     relations = tuple((name, _to_expr(form, K)) for name, form in explicit.items())
     relations += tuple(("0", _to_expr(form, K)) for form in constraints)
     equations = _descriptor(

@@ -6,7 +6,11 @@ A form is a dict variable name -> coefficient (an element of the coefficient fie
 linear combination it stands for. A wide junction makes one algebraic loop of hundreds of
 variables: a few tear variables, taken as known, leave no cycle among the others, which are
 then substituted once each in dependency order, and only the tear variables are solved for
-jointly (solving all the loop's variables jointly would fill in).
+jointly (solving all the loop's variables jointly would fill in). With many symbols the
+coefficients are rational functions that can grow exponentially through a loop: the
+arithmetic is paid for on a `Meter`, and a loop whose tearing outgrows `TEARING_SHARE` of
+the budget is left to the descriptor form as it stands (its variables and rows kept), for
+the transfer stage's fraction-free elimination, which needs no gcd at every step.
 """
 
 from __future__ import annotations
@@ -18,13 +22,43 @@ import networkx as nx
 from sympy.polys.domains.domain import Domain
 
 from mtt.derivation import deadline
+from mtt.derivation.budget import Budget, Meter, TooLarge
 
 Form = dict  # variable name -> coefficient (a domain element): a linear combination
+# the part of the derivation's budget an algebraic loop's tearing may use before the loop
+# is left to the transfer stage
+TEARING_SHARE = 100
 
 
-def times(a, b, K: Domain):
+def _terms(x) -> int:
+    """The terms of a coefficient: numerator and denominator of a rational function."""
+    return len(x.numer) + len(x.denom) if hasattr(x, "numer") else 1
+
+
+def _paid(meter: Meter | None, a, b) -> None:
+    """The products of terms that a * b or a + b over the fractions does (cross products,
+    then the gcd that cancels them, about as much again), paid for before it is done."""
+    if meter is not None:
+        meter.spend(2 * _terms(a) * _terms(b))
+
+
+def _held(meter: Meter | None, x):
+    if meter is not None:
+        meter.hold(_terms(x))
+    return x
+
+
+def plus(a, b, K: Domain, meter: Meter | None = None):
+    """a + b, paid for."""
+    if a == K.zero or b == K.zero:
+        return a + b
+    _paid(meter, a, b)
+    return _held(meter, a + b)
+
+
+def times(a, b, K: Domain, meter: Meter | None = None):
     """a * b, without the general product (and its gcd) when one factor is 1 or -1, or
-    both are numbers."""
+    both are numbers; paid for on `meter` otherwise."""
     if a == K.one:
         return b
     if b == K.one:
@@ -43,11 +77,12 @@ def times(a, b, K: Domain):
         ground = K.domain
         value = ground.quo(a.numer.LC * b.numer.LC, a.denom.LC * b.denom.LC)
         return K.convert_from(value, ground)
-    return a * b
+    _paid(meter, a, b)
+    return _held(meter, a * b)
 
 
 def solve(
-    rows: list[dict], unknowns: list[str], K: Domain
+    rows: list[dict], unknowns: list[str], K: Domain, meter: Meter | None = None
 ) -> tuple[dict[str, Form], list[str], list[Form]]:
     """Solve linear rows (forms equal to zero) for as many of `unknowns` as they determine.
 
@@ -75,12 +110,12 @@ def solve(
         scale = rows[i][column]
         if scale != K.one:
             inverse = -K.one if scale == -K.one else K.one / scale
-            rows[i] = {name: times(c, inverse, K) for name, c in rows[i].items()}
+            rows[i] = {name: times(c, inverse, K, meter) for name, c in rows[i].items()}
         for j in sorted(where[column] - {i}):
             row = rows[j]
             factor = row[column]
             for name, c in rows[i].items():
-                value = row.get(name, K.zero) - times(factor, c, K)
+                value = plus(row.get(name, K.zero), -times(factor, c, K, meter), K, meter)
                 if value == K.zero:
                     row.pop(name, None)
                     where[name].discard(j)
@@ -100,23 +135,29 @@ def solve(
     return solved, free, constraints
 
 
-def substitute(form: Form, resolved: Mapping[str, Form], K: Domain, skip=frozenset()) -> Form:
+def substitute(
+    form: Form, resolved: Mapping[str, Form], K: Domain, skip=frozenset(), meter=None
+) -> Form:
     """A form in terms of the base variables (those `resolved` does not give)."""
     total: Form = {}
     for w, c in form.items():
         if w in skip:
             continue
         for base, cb in resolved.get(w, {w: K.one}).items():
-            term = times(c, cb, K)
-            total[base] = total[base] + term if base in total else term
+            term = times(c, cb, K, meter)
+            total[base] = plus(total[base], term, K, meter) if base in total else term
     return {b: c for b, c in total.items() if c != K.zero}
 
 
-def eliminate(explicit: dict[str, Form], K: Domain) -> tuple[dict[str, Form], list, list]:
-    """Every variable in terms of the base variables, loops solved jointly.
+def eliminate(
+    explicit: dict[str, Form], K: Domain, meter: Meter
+) -> tuple[dict[str, Form], list, list]:
+    """Every variable in terms of the base variables, loops solved jointly (`TooLarge` when
+    that outgrows the budget of `meter`).
 
     Returns the resolved forms, and the loop variables left free with the loop's
-    remaining constraints when a loop does not determine them all.
+    remaining constraints when a loop does not determine them all (or when solving it
+    would take more than its share of the budget).
     """
     depends = nx.DiGraph()
     depends.add_nodes_from(explicit)
@@ -131,19 +172,31 @@ def eliminate(explicit: dict[str, Form], K: Domain) -> tuple[dict[str, Form], li
         deadline.check()
         members = sorted(condensed.nodes[node]["members"])
         if len(members) == 1 and not depends.has_edge(members[0], members[0]):
-            resolved[members[0]] = substitute(explicit[members[0]], resolved, K)
+            resolved[members[0]] = substitute(explicit[members[0]], resolved, K, meter=meter)
             continue
-        if _torn(members, explicit, resolved, K, depends):
-            continue
-        # a degenerate loop: v - sum(a_vw w, w in loop) = the rest, all rows together
+        share = Meter(Budget(max(1, meter.budget.max_terms // TEARING_SHARE)), meter.stage)
+        try:
+            if _torn(members, explicit, resolved, K, depends, share):
+                meter.spend(share.work)
+                continue
+            big = False
+        except TooLarge:
+            big = True
+        meter.spend(share.work)
+        # v - sum(a_vw w, w in loop) = the rest, all rows together: solved jointly for a
+        # degenerate loop, left to the descriptor form for one too large to solve here
         rows = []
         for v in members:
             row = {w: -c for w, c in explicit[v].items() if w in members}
             row[v] = row.get(v, K.zero) + K.one
-            for base, c in substitute(explicit[v], resolved, K, set(members)).items():
-                row[base] = row.get(base, K.zero) - c
-            rows.append(row)
-        solved, free, left = solve(rows, members, K)
+            for base, c in substitute(explicit[v], resolved, K, set(members), meter).items():
+                row[base] = plus(row.get(base, K.zero), -c, K, meter)
+            rows.append({w: c for w, c in row.items() if c != K.zero})
+        if big:
+            extra += members
+            constraints += rows
+            continue
+        solved, free, left = solve(rows, members, K, meter)
         resolved.update(solved)
         extra += free
         constraints += left
@@ -170,7 +223,7 @@ def _tears(members: list[str], depends: nx.DiGraph) -> tuple[list[str], nx.DiGra
             graph.remove_node(tear)
 
 
-def _torn(members, explicit, resolved, K, depends) -> bool:
+def _torn(members, explicit, resolved, K, depends, meter: Meter) -> bool:
     """Solve an algebraic loop by tearing: every other loop variable in terms of the tear
     variables (in dependency order, one substitution each), then the few tear variables
     from their own equations, jointly. A wide junction makes one loop of hundreds of
@@ -181,16 +234,16 @@ def _torn(members, explicit, resolved, K, depends) -> bool:
     partial: dict[str, Form] = {}
     given = ChainMap(partial, resolved)  # the tear variables stay themselves
     for v in reversed(list(nx.topological_sort(rest))):
-        partial[v] = substitute(explicit[v], given, K)
+        partial[v] = substitute(explicit[v], given, K, meter=meter)
     rows = []
     for t in tears:
-        row = {w: -c for w, c in substitute(explicit[t], given, K).items()}
-        row[t] = row.get(t, K.zero) + K.one
+        row = {w: -c for w, c in substitute(explicit[t], given, K, meter=meter).items()}
+        row[t] = plus(row.get(t, K.zero), K.one, K, meter)
         rows.append({w: c for w, c in row.items() if c != K.zero})
-    solved, free, left = solve(rows, tears, K)
+    solved, free, left = solve(rows, tears, K, meter)
     if free or left:
         return False
+    done = {v: substitute(form, solved, K, meter=meter) for v, form in partial.items()}
     resolved.update(solved)
-    for v, form in partial.items():
-        resolved[v] = substitute(form, solved, K)
+    resolved.update(done)
     return True
