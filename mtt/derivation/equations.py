@@ -16,7 +16,7 @@ and one output are u and y.
 from __future__ import annotations
 
 from dataclasses import dataclass, replace
-from functools import cache
+from functools import cache, cached_property
 
 import sympy
 from sympy.polys.domains.domain import Domain
@@ -40,7 +40,9 @@ class Equations:
     causal: CausalBondGraph
     parametrisation: Parametrisation
     domain: Domain  # the coefficient field: QQ or Q(alpha), or Q(alpha)(unknowns, symbols...)
-    relations: tuple[tuple[str, sympy.Expr], ...]  # the causal equations, variable = expression
+    # the causal equations, variable = form (the relations as sympy expressions are made
+    # when asked for: for a thousand parts that took as long as the rest of the stage)
+    forms: tuple[tuple[str, Form], ...]
     states: tuple[str, ...]  # the descriptor variables x
     E: DomainMatrix
     A: DomainMatrix
@@ -74,6 +76,11 @@ class Equations:
             inputs=(self.inputs[input],),
             outputs=(self.outputs[output],),
         )
+
+    @cached_property
+    def relations(self) -> tuple[tuple[str, sympy.Expr], ...]:
+        """The causal equations, variable = expression ("0" = expression: a constraint)."""
+        return tuple((name, _to_expr(form, self.domain)) for name, form in self.forms)
 
     def matrices(self) -> dict[str, sympy.Matrix]:
         """E, A, B, C, D as exact sympy matrices."""
@@ -230,10 +237,9 @@ def derive(
         constraints = [substitute(form, resolved, K, meter=meter) for form in constraints] + left
     except TooLarge as stop:
         raise refusal(graph, parametrisation.free, stop) from None
-    relations = tuple((name, _to_expr(form, K)) for name, form in explicit.items())
-    relations += tuple(("0", _to_expr(form, K)) for form in constraints)
+    forms = (*explicit.items(), *(("0", form) for form in constraints))
     equations = _descriptor(
-        causal, parametrisation, K, storage, resolved, relations, extra, constraints
+        causal, parametrisation, K, storage, resolved, forms, extra, constraints
     )
     return replace(equations, budget=budget)
 
@@ -280,7 +286,7 @@ def _to_sympy(K: Domain, c) -> sympy.Expr:
 
 
 def _descriptor(
-    causal, parametrisation, K, storage, resolved, relations, extra, constraints
+    causal, parametrisation, K, storage, resolved, forms, extra, constraints
 ) -> Equations:
     graph = causal.bondgraph
     inputs = {u: j for j, u in enumerate(signal_names(graph.inputs, INPUT).values())}
@@ -335,7 +341,7 @@ def _descriptor(
         causal=causal,
         parametrisation=parametrisation,
         domain=K,
-        relations=relations,
+        forms=forms,
         states=tuple(names),
         E=matrix(E, size),
         A=matrix(A, size),

@@ -60,22 +60,28 @@ def small_signal(
         ]
         return DomainMatrix(entries, (rows, cols), K)
 
-    x = [sympy.Symbol(s) for s in states]
-    A, B, C, D = (matrices[name] for name in "ABCD")
-    relations = tuple(
-        (f"d{s}", sum((A[i, j] * x[j] for j in range(size)), B[i, 0] * sympy.Symbol(INPUT)))
-        for i, s in enumerate(states)
-    ) + ((OUTPUT, sum((C[0, j] * x[j] for j in range(size)), D[0, 0] * sympy.Symbol(INPUT))),)
+    A, B = matrix("A", size, size), matrix("B", size, 1)
+    C, D = matrix("C", 1, size), matrix("D", 1, 1)
+    forms = tuple((f"d{x}", _form(A, B, i, states)) for i, x in enumerate(states))
+    forms += ((OUTPUT, _form(C, D, 0, states)),)
     return Equations(
         causal=causal,
         parametrisation=parametrisation,
         domain=K,
-        relations=relations,
+        forms=forms,
         states=tuple(states),
         E=DomainMatrix.eye(size, K),
-        A=matrix("A", size, size),
-        B=matrix("B", size, 1),
-        C=matrix("C", 1, size),
-        D=matrix("D", 1, 1),
+        A=A,
+        B=B,
+        C=C,
+        D=D,
         notes=notes,
     )
+
+
+def _form(M: DomainMatrix, N: DomainMatrix, i: int, states: tuple[str, ...]) -> dict:
+    """Row i of [M, N] as a form in the states and the input (its nonzero coefficients)."""
+    row = M.to_list()[i] if M.shape[1] else []
+    form = {x: c for x, c in zip(states, row, strict=True) if c}
+    u = N.to_list()[i][0]
+    return {**form, INPUT: u} if u else form
