@@ -170,7 +170,7 @@ class _Elimination:
             powers = {f: e + divisor[f] for f, e in exponents.items()}
             powers.update((f, e) for f, e in divisor.items() if f not in exponents)
             scaled = self.product(polys + self.expanded(powers))
-            self.meter.spend(len(scaled))
+            self.meter.spend(len(scaled) * sparse.term_cost(self.ring))
             total = total + scaled if sign > 0 else total - scaled
         for f, e in divisor.items():
             for _ in range(e):

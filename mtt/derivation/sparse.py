@@ -28,6 +28,9 @@ _FIELD = 8  # bits a variable: exponents below 2^7, the top bit of each byte a g
 # a product q_i g_j in the heap division costs about four products of a multiplication
 # (a heap step and a tuple each; measured: 3 us against 0.7 us)
 DIVISION_COST = 4
+# a product of terms in many variables costs more: one unit of work per this many of them
+# (a mesh of 49 nodes has 135: its products took some ten times a ladder's)
+VARIABLES_PER_UNIT = 16
 # a product stops when it has this many times the budget's terms (the final product is
 # held to the budget itself: this bounds the memory of one that cancels to fewer)
 PARTIAL = 4
@@ -43,6 +46,12 @@ def _packable(*polys: PolyElement) -> bool:
     )
 
 
+def term_cost(ring) -> int:
+    """The work one product (or quotient) of two terms costs in `ring`, in the `Meter`'s
+    units (a product of terms in a few variables)."""
+    return 1 + ring.ngens // VARIABLES_PER_UNIT
+
+
 def _degrees(p: PolyElement) -> list[int]:
     """p's degree in each variable."""
     return [max(exponents) for exponents in zip(*p.keys(), strict=True)]
@@ -55,7 +64,7 @@ def _pack(m: tuple[int, ...]) -> int:
 def product(a: PolyElement, b: PolyElement, meter: Meter) -> PolyElement:
     """a * b, paid for first (|a| |b| products of terms) and held after; `TooLarge` as soon
     as it grows past `PARTIAL` times the budget's terms."""
-    meter.spend(len(a) * len(b))
+    meter.spend(len(a) * len(b) * term_cost(a.ring))
     if len(a) < len(b):
         a, b = b, a
     if len(b) <= 1 or not _packable(a, b):
@@ -79,6 +88,35 @@ def product(a: PolyElement, b: PolyElement, meter: Meter) -> PolyElement:
     return result
 
 
+def _term_quotient(f: PolyElement, g: PolyElement, meter: Meter) -> PolyElement:
+    """f / g for a divisor of one term: each monomial's difference in one subtraction of
+    packed integers (a loop over a hundred exponents a term was most of a mesh's time)."""
+    ring = f.ring
+    meter.spend(len(f) * term_cost(ring))
+    ((gm, gc),) = g.items()
+    domain = ring.domain
+    divide = (lambda c: divmod(c, gc)) if domain.is_ZZ else (lambda c: (domain.exquo(c, gc), 0))
+    if not _packable(f, g):
+        terms = []
+        for m, c in f.items():
+            exponents = tuple(a - b for a, b in zip(m, gm, strict=True))
+            q, remainder = divide(c)
+            if remainder or min(exponents, default=0) < 0:
+                raise NotDivisible("the divisor does not divide the polynomial")
+            terms.append((exponents, q))
+        return ring.dtype(terms)
+    width, lead = ring.ngens, _pack(gm)
+    guards = int.from_bytes(bytes([1 << (_FIELD - 1)]) * width, "big")
+    terms = []
+    for m, c in f.items():
+        packed = _pack(m)
+        q, remainder = divide(c)
+        if remainder or ((packed | guards) - lead) & guards != guards:
+            raise NotDivisible("the divisor does not divide the polynomial")
+        terms.append((tuple((packed - lead).to_bytes(width, "big")), q))
+    return ring.dtype(terms)
+
+
 class NotDivisible(ArithmeticError):
     """The divisor does not divide the dividend (never, where the algebra says it does)."""
 
@@ -93,19 +131,10 @@ def exact_quotient(f: PolyElement, g: PolyElement, meter: Meter) -> PolyElement:
     if not f:
         return ring.zero
     if len(g) == 1:
-        meter.spend(len(f))
-        ((gm, gc),) = g.items()
-        terms = []
-        for m, c in f.items():
-            q, remainder = divmod(c, gc) if ring.domain.is_ZZ else (ring.domain.exquo(c, gc), 0)
-            exponents = tuple(a - b for a, b in zip(m, gm, strict=True))
-            if remainder or min(exponents, default=0) < 0:
-                raise NotDivisible("the divisor does not divide the polynomial")
-            terms.append((exponents, q))
-        return ring.dtype(terms)
+        return _term_quotient(f, g, meter)
     if not _packable(f):
         # sympy's division: a scan of the remainder for each quotient term
-        meter.spend(DIVISION_COST * len(f) * (len(f) + len(g)))
+        meter.spend(DIVISION_COST * len(f) * (len(f) + len(g)) * term_cost(ring))
         quotient, remainder = f.div(g)
         if remainder:
             raise NotDivisible("the divisor does not divide the polynomial")
@@ -121,6 +150,7 @@ def exact_quotient(f: PolyElement, g: PolyElement, meter: Meter) -> PolyElement:
     fm, fc = zip(*sorted((-_pack(m), c) for m, c in f.items()), strict=True)
     gm, gc = zip(*sorted((-_pack(m), c) for m, c in g.items()), strict=True)
     lead, lead_coefficient, nf, ng = gm[0], gc[0], len(fm), len(gm)
+    cost = DIVISION_COST * ng * term_cost(ring)  # a quotient term's products
     guards = int.from_bytes(bytes([1 << (_FIELD - 1)]) * width, "big")
     qm: list[int] = []  # the quotient's terms, as they come (decreasing)
     qc: list = []
@@ -145,7 +175,7 @@ def exact_quotient(f: PolyElement, g: PolyElement, meter: Meter) -> PolyElement:
             raise NotDivisible("the divisor does not divide the polynomial")
         if ((bound | guards) + monomial - lead) & guards != guards:
             raise NotDivisible("the divisor does not divide the polynomial")
-        meter.spend(DIVISION_COST * ng)
+        meter.spend(cost)
         qm.append(monomial - lead)
         qc.append(q)
         meter.hold(len(qm))

@@ -152,7 +152,7 @@ def _transfer_function(equations: Equations, meter: Meter) -> TransferFunction:
         # the last row's multipliers (the others' cancel between the two determinants)
         last = F.convert(denominators.to_dok()[size, size]).numer * scales.get(size, 1)
         den = sparse.product(den, last, meter)
-        meter.spend(len(num) * len(den))
+        meter.spend(len(num) * len(den) * sparse.term_cost(num.ring))
         # one gcd, in the ring (fractions would take several), with its cofactors (sympy's
         # division takes time quadratic in the terms)
         _, num, den = num.cofactors(den)
