@@ -8,7 +8,7 @@ import random
 
 import pytest
 import sympy
-from sympy.polys.domains import ZZ
+from sympy.polys.domains import QQ, ZZ
 from sympy.polys.matrices import DomainMatrix
 from sympy.polys.rings import ring
 
@@ -16,7 +16,7 @@ import mtt
 from mtt.cli.main import main
 from mtt.derivation.budget import Budget, Meter, TooLarge
 from mtt.derivation.elimination import bordered_ratio
-from mtt.derivation.sparse import NotDivisible, exact_quotient, product
+from mtt.derivation.sparse import NotDivisible, as_expr, exact_quotient, product
 
 
 def symbolic_ladder(sections: int) -> str:
@@ -214,3 +214,19 @@ def test_a_loop_too_large_to_tear_is_left_to_the_elimination_with_the_same_resul
     for model in (torn, kept):
         tf = model.transfer_function
         assert sympy.expand(tf.num * den - tf.den * num) == 0
+
+
+def test_expressions_are_sympys_to_the_last_argument():
+    """The fast conversion gives sympy's own expression, argument for argument (signs,
+    constants, lone factors, rational coefficients, high powers)."""
+    rng = random.Random(11)
+    for domain in (ZZ, QQ):
+        R, x, y, z = ring("x,y,z", domain)
+        for _ in range(200):
+            p = R.zero
+            for _ in range(rng.randint(0, 6)):
+                c = domain(rng.randint(-3, 3))
+                if domain == QQ:
+                    c /= QQ(rng.choice([1, 1, 2, 3]))
+                p += c * x ** rng.randint(0, 3) * y ** rng.randint(0, 2) * z ** rng.randint(0, 12)
+            assert sympy.srepr(as_expr(p)) == sympy.srepr(p.as_expr())

@@ -19,7 +19,9 @@ polynomials within the budget can have their product of terms: 10^7 of them, gig
 from __future__ import annotations
 
 import heapq
+from functools import cmp_to_key
 
+import sympy
 from sympy.polys.rings import PolyElement
 
 from mtt.derivation.budget import Meter, TooLarge
@@ -182,3 +184,41 @@ def exact_quotient(f: PolyElement, g: PolyElement, meter: Meter) -> PolyElement:
         push(heap, (qm[-1] + gm[1], len(qm) - 1, 1))
     unpack = lambda m: tuple((-m).to_bytes(width, "big"))  # noqa: E731
     return ring.dtype([(unpack(m), c) for m, c in zip(qm, qc, strict=True)])
+
+
+_CANONICAL = cmp_to_key(sympy.Basic.compare)  # the order of a product's factors in sympy
+
+
+def as_expr(poly: PolyElement) -> sympy.Expr:
+    """`poly.as_expr()`, the same expression, made faster: each term's product put together
+    in sympy's canonical order from one sort of the powers that occur, not by sympy's
+    general product (which flattens and sorts each term again: 2.4 ms a term of a symbolic
+    ladder's result on a loaded machine). Over other domains than the integers and the
+    rationals (a coefficient can be a sum there), sympy's own."""
+    ring = poly.ring
+    if not (ring.domain.is_ZZ or ring.domain.is_QQ):
+        return poly.as_expr()
+    powers: dict[tuple[int, int], sympy.Expr] = {}
+    terms = []
+    for monomial, coefficient in poly.items():
+        factors = []
+        for i, e in enumerate(monomial):
+            if e:
+                factor = powers.get((i, e))
+                if factor is None:
+                    x = ring.symbols[i]
+                    factor = powers[i, e] = x if e == 1 else sympy.Pow(x, e)
+                factors.append(factor)
+        terms.append((ring.domain.to_sympy(coefficient), factors))
+    rank = {id(f): r for r, f in enumerate(sorted(powers.values(), key=_CANONICAL))}
+    order = lambda factor: rank[id(factor)]  # noqa: E731
+    made = []
+    for c, factors in terms:
+        factors.sort(key=order)
+        if not factors:
+            made.append(c)
+        elif c == 1 and len(factors) == 1:
+            made.append(factors[0])
+        else:
+            made.append(sympy.Mul._from_args(tuple(factors) if c == 1 else (c, *factors), True))
+    return sympy.Add(*made)

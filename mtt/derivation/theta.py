@@ -17,6 +17,7 @@ from dataclasses import dataclass, field
 import sympy
 from sympy.polys.rings import PolyRing
 
+from mtt.derivation.sparse import as_expr
 from mtt.derivation.transfer import TransferFunction
 from mtt.language.diagnostics import ModelError, Position, Source, error
 
@@ -155,7 +156,7 @@ def theta_matrix(tf: TransferFunction) -> Theta:
             entry[others] = coefficient if sign > 0 else -coefficient
     rest = PolyRing(tf.gens[1 + p :] or (sympy.Dummy(),), tf.num.ring.domain)  # s, unknowns first
     rows = [
-        {powers: rest.from_dict(entry if tf.gens[1 + p :] else {(0,): entry[()]}).as_expr()
+        {powers: as_expr(rest.from_dict(entry if tf.gens[1 + p :] else {(0,): entry[()]}))
          for powers, entry in row.items()}
         for row in terms
     ]  # fmt: skip

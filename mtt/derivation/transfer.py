@@ -38,11 +38,11 @@ class TransferFunction:
 
     @property
     def numerator(self) -> sympy.Expr:
-        return self.num.as_expr()
+        return sparse.as_expr(self.num)
 
     @property
     def denominator(self) -> sympy.Expr:
-        return self.den.as_expr()
+        return sparse.as_expr(self.den)
 
     def degree(self, which: str) -> int:
         """The degree in s of 'num' or 'den'."""
