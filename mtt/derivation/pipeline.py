@@ -12,8 +12,9 @@ from mtt.derivation.operating import values
 from mtt.derivation.parameters import ParameterChoice, parametrise
 from mtt.derivation.small_signal import small_signal
 from mtt.derivation.structure import causal_for
-from mtt.derivation.theta import Theta, theta_matrix
+from mtt.derivation.theta import Theta
 from mtt.derivation.transfer import TransferFunction, transfer_function
+from mtt.derivation.transfer_matrix import estimator_theta
 from mtt.language.bondgraph import BondGraph, Selection, build
 from mtt.language.diagnostics import ModelError, error
 from mtt.language.parse import parse
@@ -99,7 +100,7 @@ def transfer_for(path: str | Path, choice: ParameterChoice = DEFAULT_CHOICE) -> 
 def theta_for(path: str | Path, choice: ParameterChoice = DEFAULT_CHOICE) -> Theta:
     """Text -> ... -> Theta: everything a generated estimator needs (so, an unknown)."""
     graph = load(path, choice.selection)
-    theta = theta_matrix(transfer_function(equations_for(graph, choice, identify=True)))
+    theta = estimator_theta(equations_for(graph, choice, identify=True))
     if not theta.unknowns:
         raise ModelError(read_source(path), [NO_UNKNOWN])
     return theta

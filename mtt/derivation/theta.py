@@ -51,6 +51,10 @@ class Theta:
     source: Source | None = field(default=None, repr=False, compare=False)
     name_position: Position | None = field(default=None, repr=False, compare=False)
     declared: Mapping[str, Position] = field(default_factory=dict, repr=False, compare=False)
+    # several inputs or outputs: every channel's Theta over the common A(s), output by
+    # output (`transfer_matrix.channel_thetas`; this one is the first), and (outputs, inputs)
+    channels: tuple[Theta, ...] = field(default=(), repr=False, compare=False)
+    shape: tuple[int, int] = (1, 1)
 
     @property
     def unknown(self) -> str | None:
@@ -134,7 +138,7 @@ def monomial_text(unknowns: tuple[str, ...], monomial: Monomial) -> str:
     return "*".join(factors) or "1"
 
 
-def _column_order(monomial: Monomial) -> tuple:
+def column_order(monomial: Monomial) -> tuple:
     """By total degree, then higher powers of the earlier unknowns first."""
     return (sum(monomial), tuple(-e for e in monomial))
 
@@ -163,7 +167,7 @@ def theta_matrix(tf: TransferFunction) -> Theta:
     occurring = {monomial for row in rows for monomial in row}
     if p <= 1:  # every power up to the degree
         occurring = {(j,) * p for j in range(max(sum(mono) for mono in occurring) + 1)}
-    monomials = tuple(sorted(occurring, key=_column_order))
+    monomials = tuple(sorted(occurring, key=column_order))
     source, detector = (
         graph.component(names[0]) for names in (equations.inputs, equations.outputs)
     )

@@ -11,7 +11,7 @@ that no entry shows (then each entry's reduced form cancels it: `cancelled`).
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from functools import cached_property
 
 import sympy
@@ -19,7 +19,7 @@ from sympy.polys.rings import PolyElement
 
 from mtt.derivation import constants
 from mtt.derivation.equations import Equations
-from mtt.derivation.theta import Theta, theta_matrix
+from mtt.derivation.theta import Theta, column_order, refuse_cancelled, theta_matrix
 from mtt.derivation.transfer import LAPLACE, TransferFunction, transfer_function
 from mtt.language.diagnostics import ModelError, error
 
@@ -168,3 +168,46 @@ def transfer_matrix(equations: Equations) -> TransferMatrix:
         characteristic=A,
         numerators=tuple(tuple(numerators[i * inputs : (i + 1) * inputs]) for i in range(outputs)),
     )
+
+
+def channel_thetas(matrix: TransferMatrix) -> tuple[Theta, ...]:
+    """Theta of every channel (output i, input j, row by row) over the common A(s): rows
+    a0..an shared, then -b0..-bm of B_ij, every channel padded to the largest m and the
+    columns of every monomial that occurs in any: what an estimator from several inputs and
+    outputs needs (A(s) y_i = sum_j B_ij(s) u_j in the paper's cost, entry by entry in the
+    exact fit)."""
+    gens, A = matrix.entries[0][0].gens, matrix.characteristic
+    thetas = [
+        theta_matrix(TransferFunction(matrix.equations.channel(i, j), gens, b, A))
+        for i, row in enumerate(matrix.numerators)
+        for j, b in enumerate(row)
+    ]
+    m = max(theta.m for theta in thetas)
+    monomials = tuple(
+        sorted({mono for theta in thetas for mono in theta.monomials}, key=column_order)
+    )
+    if len(thetas[0].unknowns) <= 1 and monomials:  # every power up to the degree
+        monomials = tuple(
+            (j,) * len(thetas[0].unknowns) for j in range(max(map(sum, monomials)) + 1)
+        )
+
+    def padded(theta: Theta) -> Theta:
+        rows = theta.matrix.tolist()
+        rows += [[0] * len(theta.monomials) for _ in range(m - theta.m)]
+        where = {mono: c for c, mono in enumerate(theta.monomials)}
+        entries = [[row[where[mono]] if mono in where else 0 for mono in monomials] for row in rows]
+        return replace(theta, m=m, monomials=monomials, matrix=sympy.Matrix(entries))
+
+    return tuple(padded(theta) for theta in thetas)
+
+
+def estimator_theta(equations: Equations) -> Theta:
+    """Theta for a generated estimator: the transfer function's, or with several inputs or
+    outputs channel [0, 0]'s over the common A(s) with every channel's (`channel_thetas`),
+    each unknown in some channel."""
+    if not equations.several:
+        return theta_matrix(transfer_function(equations))
+    channels = channel_thetas(transfer_matrix(equations))
+    refuse_cancelled(*channels)
+    shape = (len(equations.outputs), len(equations.inputs))
+    return replace(channels[0], channels=channels, shape=shape)
