@@ -9,6 +9,7 @@ from types import ModuleType, SimpleNamespace
 
 import numpy as np
 
+from mtt.language.diagnostics import MttError
 from mtt.present import fits
 
 
@@ -67,3 +68,11 @@ class Fit:
             + "</p>"
             + (f"<ul>{warnings}</ul>" if warnings else "")
         )
+
+
+def delegate(function, *args, **options):
+    """Call the generated module; its ValueErrors (bad arguments, named) become MttError."""
+    try:
+        return function(*args, **options)
+    except ValueError as exc:
+        raise MttError(str(exc), kind="bad_argument") from exc

@@ -14,7 +14,7 @@ import numpy as np
 from mtt import files
 from mtt.api import systems
 from mtt.api.exact import exact, exact_point
-from mtt.api.fits import Fit
+from mtt.api.fits import Fit, delegate
 from mtt.api.matrix import TransferMatrix
 from mtt.api.results import Causality, StateSpace, SteadyStates, Theta, TransferFunction
 from mtt.data import records
@@ -28,7 +28,7 @@ from mtt.derivation.identifiability import Identifiability, identifiability, mat
 from mtt.derivation.nonlinear import nonlinear_parts
 from mtt.derivation.parameters import ParameterChoice
 from mtt.derivation.transfer import transfer_function
-from mtt.derivation.transfer_matrix import transfer_matrix
+from mtt.derivation.transfer_matrix import estimator_theta, transfer_matrix
 from mtt.estimator import codegen, nonlinear_codegen
 from mtt.language.bondgraph import BondGraph
 from mtt.language.diagnostics import MttError, Source
@@ -168,17 +168,20 @@ class Model:
 
     @property
     def theta(self) -> Theta:
-        return Theta(self._checked_theta())
+        return Theta(self._checked_theta(self._theta))
 
-    def _checked_theta(self) -> derived.Theta:
-        if not self._theta.unknowns:
+    def _checked_theta(self, theta: derived.Theta | None = None) -> derived.Theta:
+        theta = theta or (
+            estimator_theta(self._equations) if self.bondgraph.several else self._theta
+        )
+        if not theta.unknowns:
             raise MttError(
                 f"{self.name} declares no unknown parameter: declare one with 'unknown NAME' "
                 "or load it with unknowns='NAME'",
                 kind="no_unknown",
                 file=self.source.name,
             )
-        return self._theta
+        return theta
 
     def identifiability(self) -> Identifiability:
         """Whether input/output data determine the unknowns, decided exactly for generic
@@ -331,7 +334,7 @@ class Model:
             raise MttError(
                 f"{self.name} gives no value of its unknown: pass k", kind="missing_value"
             )
-        return _delegate(module.simulate, t, u, k, **options)
+        return delegate(module.simulate, t, u, k, **options)
 
     def read_csv(self, path: str | Path, *, columns=("t", "u", "y")) -> Record:
         """A measured record (mtt.data): the columns `columns` (time, input, output; "T,U,Y"
@@ -362,7 +365,7 @@ class Model:
         options = dict(k0=k0, beta=beta, S0=S0, C=C, hold=hold, engine=engine, bounds=bounds,
                        method=method, rtol=rtol, atol=atol, max_step=max_step,
                        progress=progress)  # fmt: skip
-        return _delegate(self._estimator.estimate, t, u, y, **options, **known)
+        return delegate(self._estimator.estimate, t, u, y, **options, **known)
 
     def fit(
         self, t, u, y, *, method: str = "pem", noise: str = "auto", C="auto", k0=None,
@@ -384,10 +387,12 @@ class Model:
         >>> print(found.summary().splitlines()[0])
         rlc: 1001 samples
         """
-        options = dict(method=method, noise=noise, C=C, k0=k0, bounds=bounds, offset=offset,
-                       initial_state=initial_state, hold=hold, beta=beta,
-                       uncertainty=uncertainty)  # fmt: skip
-        result = _delegate(self._estimator.fit, t, u, y, **options, **known)
+        options = dict(noise=noise, C=C, k0=k0, bounds=bounds, offset=offset,
+                       initial_state=initial_state, hold=hold)  # fmt: skip
+        if self.bondgraph.several:  # u, y: a column (or a dict entry) per input, per output
+            return delegate(self._estimator.fit_signals, t, u, y, **options, **known)
+        options.update(method=method, beta=beta, uncertainty=uncertainty)
+        result = delegate(self._estimator.fit, t, u, y, **options, **known)
         records = [t] if np.ndim(t[0]) == 0 else t  # one record, or a list of them
         return Fit(result, self._estimator, tuple(f"{np.size(r)} samples" for r in records))
 
@@ -409,12 +414,4 @@ class Model:
         >>> round(compared.fit_percent, 1), round(compared.offset, 3), compared.estimated
         (100.0, 0.3, 'its initial state and output offset estimated by least squares')
         """
-        return _delegate(fit.compare, t, u, y)
-
-
-def _delegate(function, *args, **options):
-    """Call the generated module; its ValueErrors (bad arguments, named) become MttError."""
-    try:
-        return function(*args, **options)
-    except ValueError as exc:
-        raise MttError(str(exc), kind="bad_argument") from exc
+        return delegate(fit.compare, t, u, y)

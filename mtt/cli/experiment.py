@@ -83,12 +83,25 @@ def module_for(args) -> ModuleType:
 
 
 def checked_module(module: ModuleType) -> ModuleType:
-    """The module, if the model gives every kept parameter a value."""
+    """The module, if it has one input and one output and the model gives every kept
+    parameter a value."""
+    if hasattr(module, "theta_channels"):
+        raise UsageError(several_records(module))
     missing = [name for name, value in module.DEFAULTS.items() if value is None]
     if missing:
         name = missing[0]
         raise UsageError(f"the model gives no value for {name}: pass --set {name}=VALUE")
     return module
+
+
+def several_records(module: ModuleType) -> str:
+    """Why a command that reads records refuses a model of several inputs or outputs."""
+    return (
+        f"from {', '.join(module.INPUTS)} to {', '.join(module.OUTPUTS)}: the commands that "
+        "read records (fit, estimate, validate, simulate, batch) take one input and one "
+        "output (--input TYPE:NAME --output TYPE:NAME); fit every signal with the API's "
+        "Model.fit or the compiled module's fit_signals (docs/estimator.md)"
+    )
 
 
 def signal_label(module: ModuleType, role: str) -> str:

@@ -145,12 +145,6 @@ def _wrapped(label: str, polynomial: sympy.Expr) -> str:
     return "\n        ".join(lines)
 
 
-def _magnitude(value: sympy.Expr) -> str:
-    """A number far outside floating point by its leading digits and exponent (its first
-    digits alone, 1000... for 10^400 or 1/1000... for 10^-400, read as in range)."""
-    return sympy.sstr(sympy.N(value, 4))
-
-
 def _in_range(theta: Theta, value: sympy.Expr, name: str | None = None) -> sympy.Expr:
     """value (of the parameter `name`, or else a coefficient of Theta), unless the module's
     floating point cannot hold it (it would overflow to inf or vanish): then an error."""
@@ -163,7 +157,7 @@ def _in_range(theta: Theta, value: sympy.Expr, name: str | None = None) -> sympy
         raise _fail(
             theta,
             "out_of_range",
-            f"{what}, about {_magnitude(value)}, is beyond the floating-point "
+            f"{what}, about {sympy.sstr(sympy.N(value, 4))}, is beyond the floating-point "
             "range (about 1e-308 to 1e308) that the estimator computes in; give the parameters "
             "values in units nearer 1",
             name,
@@ -240,16 +234,17 @@ def environment() -> jinja2.Environment:
 
 def _context(theta: Theta) -> dict:
     _check(theta)
-    by_name = {symbol.name: symbol for symbol in theta.matrix.free_symbols}
+    by_name = {s.name: s for c in (theta, *theta.channels) for s in c.matrix.free_symbols}
     strays = sorted(set(by_name) - set(theta.symbols))
     if strays:
         raise ValueError(f"Theta depends on {strays}, which are not kept parameters")
     symbols = [by_name[name] for name in theta.symbols if name in by_name]
-    matrix = theta.matrix
     rows = [
-        ([_entry(theta, matrix[i, j], symbols) for j in range(matrix.cols)], label)
+        ([_entry(theta, entry, symbols) for entry in theta.matrix.row(i)], label)
         for i, label in enumerate(theta.row_labels)
     ]
+    channels = [[_entry(theta, e, symbols) for e in c.matrix.row(i)] for c in theta.channels
+                for i in range(c.matrix.rows)]  # fmt: skip
     defaults = {name: theta.defaults.get(name) for name in theta.symbols}
     several = len(theta.unknowns) > 1
     given = {
@@ -295,22 +290,23 @@ def _context(theta: Theta) -> dict:
         "transfer": f"({theta.num})/({theta.den})",
         "numerator": _wrapped("B(s)", theta.num),
         "denominator": _wrapped("A(s)", theta.den),
-        "n": theta.n,
-        "m": theta.m,
-        "N": theta.N,
+        **{"n": theta.n, "m": theta.m, "N": theta.N},
         "assumed": ", ".join(f"{name} = {_doc_text(str(v))}" for name, v in theta.assumed.items()),
         "symbols": theta.symbols,
         "parameters_doc": ", ".join(
             f"{name} = {_doc_text(str(value))}" if value is not None else f"{name} (no value)"
             for name, value in defaults.items()
         ),
-        "defaults": "{"
-        + ", ".join(
-            f"{name!r}: {'None' if value is None else repr(_float(_in_range(theta, value, name)))}"
-            for name, value in defaults.items()
-        )
-        + "}",
+        "defaults": repr(
+            {
+                name: None if value is None else _float(_in_range(theta, value, name))
+                for name, value in defaults.items()
+            }
+        ),  # fmt: skip
         "rows": rows,
+        "channels": [channels[i : i + len(rows)] for i in range(0, len(channels), len(rows))],
+        "inputs": tuple(c.input for c in theta.channels[: theta.shape[1]]),
+        "outputs": tuple(c.output for c in theta.channels[:: theta.shape[1]]),
         "example_k": example_k,
         "example_k0": example_k0,
         "example_k0_option": example_option,

@@ -1,0 +1,89 @@
+"""Estimation from several inputs and outputs (issue 21 item 2): each channel's Theta over
+the common A(s), hand-derived; records simulated by scipy's lsim of mtt's own state space
+(not by the code under test); the fit with a measured disturbance against the fit that
+leaves it in the noise; unknowns that two sensors determine together and one does not."""
+
+from __future__ import annotations
+
+import warnings
+from functools import cache
+from pathlib import Path
+
+import numpy as np
+import pytest
+from scipy import signal
+
+import mtt
+
+ROOT = Path(__file__).resolve().parent.parent
+LOAD = str(ROOT / "models" / "dc_motor_load.bg")
+SENSORS = str(ROOT / "models" / "dc_motor_sensors.bg")
+
+
+@cache
+def motor():
+    return mtt.load(LOAD, input="Se:v,Se:tl", output="Df:speed,Df:current")
+
+
+def record(model, k, inputs: int, seed: int, span: float = 60.0, dt: float = 0.02):
+    """PRBS inputs held between samples, every output by lsim of the state space at k
+    (exact for the hold), plus white noise at 20 dB on each output."""
+    t = np.arange(0.0, span, dt)
+    rng = np.random.default_rng(seed)
+    U = np.repeat(rng.choice([-1.0, 1.0], size=(int(span) + 1, inputs)), int(1 / dt), 0)[: t.size]
+    G = model.to_scipy(k)
+    clean = signal.lsim((G.A, G.B, G.C, G.D), U, t, interp=False)[1]
+    return t, U, clean + rng.standard_normal(clean.shape) * clean.std(0) / 10
+
+
+def test_each_channel_has_its_theta_over_the_common_characteristic_polynomial():
+    # la i' = v - ra i - km w, (jm + jl) w' = km i - b w + tl with ra = 1, la = 1/10, km = 1,
+    # jm = 1, b = 1/10, times 100: A = 10 (1 + jl) s^2 + (101 + 100 jl) s + 110;
+    # speed: 100 v + (10 s + 100) tl; current: (100 (1 + jl) s + 10) v - 100 tl
+    Thetas = motor().estimator().theta_channels()
+    a = [[110, 0], [101, 100], [10, 10]]
+    expected = [
+        [a + [[-100, 0], [0, 0]], a + [[-100, 0], [-10, 0]]],
+        [a + [[-10, 0], [-100, -100]], a + [[100, 0], [0, 0]]],
+    ]
+    assert Thetas.tolist() == expected
+    module = motor().estimator()
+    assert (module.INPUTS, module.OUTPUTS) == (("Se:v", "Se:tl"), ("Df:speed", "Df:current"))
+    assert module.theta().tolist() == expected[0][0]
+
+
+def test_a_measured_disturbance_is_fitted_not_left_in_the_noise():
+    t, U, Y = record(motor(), 10.0, 2, seed=3)
+    module = motor().estimator()
+    found = motor().fit(t, {"Se:v": U[:, 0], "Se:tl": U[:, 1]}, Y, hold="zoh", noise="white")
+    assert found.ok and abs(found.k - 10.0) < 4 * found.k_se < 0.2
+    assert np.allclose(found.noise_std, Y.std(0) / 10 / np.sqrt(1.01), rtol=0.1)
+    assert np.all(found.fit_percent > 85)
+    assert np.allclose(
+        found.simulate(t, U, hold="zoh"), module.simulate_signals(t, U, found.k, hold="zoh")
+    )
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        alone = module.fit(t, U[:, 0], Y[:, 0], hold="zoh")  # the torque unmeasured
+    assert alone.k_se > 20 * found.k_se
+
+
+def test_two_sensors_determine_what_neither_does_alone():
+    model = mtt.load(SENSORS, output="Df:speed,Df:current")
+    truth = [1.0, 1.0, 10.0, 0.1]
+    t, U, Y = record(model, truth, 1, seed=5, span=40.0)
+    found = model.fit(t, U, Y, hold="zoh", noise="white")
+    assert found.ok and np.all(np.abs(found.k - truth) < 5 * found.k_se)
+    speed = mtt.load(SENSORS, output="Df:speed")
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        alone = speed.fit(t, U[:, 0], Y[:, 0], hold="zoh", noise="white")
+    assert not alone.ok and not np.all(np.isfinite(alone.k_se))
+
+
+def test_signals_are_checked_by_name_and_shape():
+    t, U, Y = record(motor(), 10.0, 2, seed=1, span=5.0)
+    with pytest.raises(mtt.MttError, match="shape"):
+        motor().fit(t, U[:, 0], Y)
+    with pytest.raises(mtt.MttError, match="missing"):
+        motor().fit(t, {"Se:v": U[:, 0]}, Y)
