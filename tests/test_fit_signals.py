@@ -5,6 +5,7 @@ leaves it in the noise; unknowns that two sensors determine together and one doe
 
 from __future__ import annotations
 
+import json
 import warnings
 from functools import cache
 from pathlib import Path
@@ -87,3 +88,18 @@ def test_signals_are_checked_by_name_and_shape():
         motor().fit(t, U[:, 0], Y)
     with pytest.raises(mtt.MttError, match="missing"):
         motor().fit(t, {"Se:v": U[:, 0]}, Y)
+
+
+def test_the_command_line_reads_a_column_per_signal(capsys, tmp_path):
+    from mtt.cli.main import main
+
+    t, U, Y = record(motor(), 10.0, 2, seed=2, span=30.0)
+    path = tmp_path / "rig.csv"
+    np.savetxt(path, np.column_stack([t, U, Y]), delimiter=",", header="t,v,tl,w,i", comments="")
+    both = ["--input", "Se:v,Se:tl", "--output", "Df:speed,Df:current", "--data", str(path)]
+    status = main(["fit", LOAD, *both, "--columns", "t,v,tl,w,i", "--hold", "zoh", "--json"])
+    found = json.loads(capsys.readouterr().out)
+    assert status == 0 and found["ok"] and list(found["signals"]) == ["Df:speed", "Df:current"]
+    assert abs(found["unknowns"]["jl"]["k"] - 10.0) < 4 * found["unknowns"]["jl"]["k_se"]
+    assert main(["fit", LOAD, *both]) == 2  # the default columns are the signals' labels
+    assert "t,Se:v,Se:tl,Df:speed,Df:current" in capsys.readouterr().err

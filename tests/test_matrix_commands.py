@@ -113,7 +113,7 @@ def test_a_step_for_one_input_and_output_says_so(capsys, tmp_path):
     assert status == 0 and "def fit_signals(" in (tmp_path / "m.py").read_text()
     data = tmp_path / "data.csv"
     data.write_text("t,u,y\n0,0,0\n1,1,1\n2,1,1\n3,0,1\n")
-    status, _, err = run(capsys, "fit", MOTOR, *BOTH, "--data", str(data))
+    status, _, err = run(capsys, "estimate", MOTOR, *BOTH, "--data", str(data), "--k0", "5")
     assert status == 2 and "take one input and one output" in err and "fit_signals" in err
     model = mtt.load(MOTOR, input="Se:v,Se:tl")
     with pytest.raises(mtt.MttError) as caught:

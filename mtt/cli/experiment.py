@@ -78,8 +78,10 @@ def experiment_data(module: ModuleType, args, several: bool = False) -> list[Rec
 # the commands --------------------------------------------------------------------------
 
 
-def module_for(args) -> ModuleType:
-    return checked_module(codegen.load(pipeline.theta_for(args.file, choice_from_args(args))))
+def module_for(args, several: bool = False) -> ModuleType:
+    """The estimator module; with several inputs or outputs only where `several` allows."""
+    module = codegen.load(pipeline.theta_for(args.file, choice_from_args(args)))
+    return module if several and hasattr(module, "theta_channels") else checked_module(module)
 
 
 def checked_module(module: ModuleType) -> ModuleType:
@@ -98,9 +100,9 @@ def several_records(module: ModuleType) -> str:
     """Why a command that reads records refuses a model of several inputs or outputs."""
     return (
         f"from {', '.join(module.INPUTS)} to {', '.join(module.OUTPUTS)}: the commands that "
-        "read records (fit, estimate, validate, simulate, batch) take one input and one "
-        "output (--input TYPE:NAME --output TYPE:NAME); fit every signal with the API's "
-        "Model.fit or the compiled module's fit_signals (docs/estimator.md)"
+        "read records (estimate, validate, simulate, batch) take one input and one output "
+        "(--input TYPE:NAME --output TYPE:NAME); `mtt fit --data` fits every signal, as do "
+        "the API's Model.fit and the compiled module's fit_signals (docs/estimator.md)"
     )
 
 

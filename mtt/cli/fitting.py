@@ -27,7 +27,11 @@ def cmd_fit(args) -> int:
     kind = batch.mode(args)  # --data patterns, --per-record, --jobs...: mtt.batch
     if kind is not None:
         return batch.cmd_fit_many(args, kind)
-    module = module_for(args)
+    module = module_for(args, several=True)
+    if hasattr(module, "theta_channels"):  # several inputs or outputs
+        from mtt.cli.signals import cmd_fit_signals
+
+        return cmd_fit_signals(args, module)
     records = experiment_data(module, args, several=True)
     held_out = validation_data(module, args)  # read first: a wrong path fails before the fit
     arrays = [[getattr(data, name) for data in records] for name in ("t", "u", "y")]
