@@ -3065,11 +3065,18 @@ def _nuisance_values(nu: np.ndarray, real: _Realisation, offset: bool, initial_s
 
 def _sensitivities(real: _Realisation, t, u, hold: str, z0) -> tuple[np.ndarray, np.ndarray]:
     """The output from the initial state z0 with input u (without offset), and its
-    derivatives with respect to the unknowns with z0 held: (samples,), (samples, unknowns).
-    The augmented state is [dz/dk_1; ..; dz/dk_p; z], upper quasi-triangular as F is."""
-    count, order = len(real.dd), real.order
-    if order == 0:
+    derivatives with respect to the unknowns with z0 held: (samples,), (samples, unknowns)."""
+    if real.order == 0:
         return real.d * u, np.outer(u, real.dd)
+    base, slopes = _augmented(real, t, u, hold, z0)
+    return real.h @ base + real.d * u, _output_slopes(real, base, slopes, u)
+
+
+def _augmented(real: _Realisation, t, u, hold: str, z0) -> tuple[np.ndarray, np.ndarray]:
+    """The states z (order, samples) of z' = F z + g u from z0, and their derivatives with
+    respect to the unknowns with z0 held (unknowns, order, samples). The augmented state
+    is [dz/dk_1; ..; dz/dk_p; z], upper quasi-triangular as F is."""
+    count, order = len(real.dd), real.order
     size = order * (1 + count)
     F = linalg.block_diag(*[real.F] * (count + 1))
     F[: count * order, count * order :] = real.dF.reshape(count * order, order)
@@ -3078,11 +3085,12 @@ def _sensitivities(real: _Realisation, t, u, hold: str, z0) -> tuple[np.ndarray,
     start = np.zeros(size)
     start[count * order :] = z0
     rows = _state_rows(F, g, t, u, hold, start)
-    base = rows[count * order :]
-    output = real.h @ base + real.d * u
-    slopes = (rows[: count * order].reshape(count, order, t.size).transpose(0, 2, 1) @ real.h
-              + real.dh @ base + np.outer(real.dd, u))  # fmt: skip
-    return output, slopes.T
+    return rows[count * order :], rows[: count * order].reshape(count, order, t.size)
+
+
+def _output_slopes(real: _Realisation, z, dz, u) -> np.ndarray:
+    """d/dk of y = h z + d u (samples, unknowns), from the states z and their derivatives."""
+    return (dz.transpose(0, 2, 1) @ real.h + real.dh @ z + np.outer(real.dd, u)).T
 
 
 def _with_nuisances(t, u, y, k, *, hold: str, offset: bool, initial_state: bool, known: dict):
