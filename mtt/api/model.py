@@ -375,7 +375,8 @@ class Model:
         """The generated module's batch `fit` -> Fit: k over whole records (lists of arrays
         for several), the minimiser of the exact prediction error with a noise model, with
         k_se, ci, fit_percent, noise, warnings and ok; it prints as `mtt fit` does
-        (`summary()`) and shows as a table in Jupyter.
+        (`summary()`) and shows as a table in Jupyter. With several inputs or outputs, u
+        and y have a column per signal (or are dicts by name): the module's `fit_signals`.
 
         >>> import mtt, numpy as np
         >>> rlc = mtt.load(mtt.example("rlc"))
