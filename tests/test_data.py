@@ -33,7 +33,7 @@ def test_a_record_read_names_its_file_and_the_rows_out_of_order(rlc, tmp_path):
     assert record.note == f"3 samples from {good}" and record.clean is record.k is None
     late = tmp_path / "late.csv"
     late.write_text("t,u,y\n0,1,0\n1,1,0\n0.5,1,0\n")
-    with pytest.raises(DataError, match=r"late.csv: the times \(column 't'\) must increase"):
+    with pytest.raises(DataError, match=r"late.csv:4: the times \(column 't'\) must increase"):
         records.read(rlc, str(late))
 
 
@@ -98,3 +98,4 @@ def test_the_api_reads_a_record_through_mtt_data(tmp_path):
     with pytest.raises(mtt.MttError, match="no column 't'") as caught:
         model.read_csv(path)
     assert caught.value.kind == "bad_argument" and caught.value.file == str(path)
+    assert caught.value.line == 1  # the header's line

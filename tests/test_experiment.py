@@ -205,7 +205,7 @@ def test_a_stopped_run_is_reported_with_exit_status_1(capsys):
         (["--k0", "1", "--data", "nan.csv"], "nan.csv:3: column 'y' holds 'nan', not a number"),
         (
             ["--k0", "1", "--data", "back.csv"],
-            "back.csv: the times (column 't') must increase strictly: 1.0 (data row 3) follows",
+            "back.csv:4: the times (column 't') must increase strictly: 1.0 (data row 3) follows",
         ),
         (["--k0", "1", "--data", "text.csv"], "text.csv:3: column 'u' holds 'one', not a number"),
         (["--k0", "1", "--set", "zz=1"], "error[undeclared_parameter]"),
@@ -363,7 +363,7 @@ def test_fit_warnings_go_to_stderr(capsys):
         # signals and noise too large for floating point (the last two were internal errors,
         # a CSV file of 1e300 a failure inside LAPACK)
         (["--amplitude", "1e308"], "u[0] is 1e+308: signals must stay within 1e+150 in size"),
-        (["--data", "huge.csv"], "y[1] is 1e+300: signals must stay within 1e+150 in size"),
+        (["--data", "huge.csv"], "huge.csv:3: column 'y' holds 1e+300: signals must stay within"),
         (["--noise-snr", "-1e4"], "snr_db = -10000 makes noise of standard deviation inf"),
         (["--noise-uniform", "1.7e308"], "--noise-uniform must be from 0 to 1e+148"),
         (["--dt", "5e-324"], "--t-end / --dt = inf samples is too many"),  # internal errors,
@@ -408,7 +408,7 @@ def test_estimate_with_a_relative_prior_and_absurd_times(tmp_path, capsys):
     scaled.write_text("t,u,y\n" + "".join(f"{v * 1e300:.17g},1,{v / 10:.17g}\n" for v in t))
     for command in (["estimate", "--k0", "5"], ["fit"]):
         status, out, err = mtt(capsys, command[0], DC_DRIVE, "--data", str(scaled), *command[1:])
-        assert status == 2 and "t[100] is 1e+301: times must stay within 1e+15 in size" in err
+        assert status == 2 and "scaled.csv:3: column 't' holds 1e+299: times must stay" in err
 
 
 def test_a_model_named_as_a_python_module_is_refused(tmp_path, capsys):

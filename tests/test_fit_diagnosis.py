@@ -209,7 +209,7 @@ def test_errors_in_one_of_several_files_name_the_file(tmp_path, monkeypatch, cap
     Path("late.csv").write_text("t,u,y\n0,1,0\n\n0.02,1,0\n0.01,1,0\n0.03,1,0\n")
     Path("short.csv").write_text("t,u,y\n0,1,0\n0.01,1,0\n0.02,1,0\n")
     for data, message in [
-        ("late.csv", "late.csv: the times (column 't') must increase strictly: 0.01 (data row 3) "
+        ("late.csv", "late.csv:5: the times (column 't') must increase strictly: 0.01 (data row 3) "
          "follows 0.02 (data row 2)"),
         ("short.csv", "record 1 (short.csv) has 3 samples: too few to determine k"),
     ]:  # fmt: skip
@@ -219,4 +219,4 @@ def test_errors_in_one_of_several_files_name_the_file(tmp_path, monkeypatch, cap
         assert status == 2 and f"mtt fit: error: {message}" in err
     status = main(["estimate", DC_DRIVE, "--data", "late.csv",
                    "--k0", "1"])  # fmt: skip
-    assert status == 2 and "late.csv: the times (column 't') must" in capsys.readouterr().err
+    assert status == 2 and "late.csv:5: the times (column 't') must" in capsys.readouterr().err

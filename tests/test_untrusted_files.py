@@ -227,3 +227,21 @@ def test_a_generated_module_for_a_batch_is_read_as_a_file_too(tmp_path):
     with pytest.raises(mtt.MttError, match="not a regular file") as caught:
         estimator(tmp_path / "pipe.py")
     assert caught.value.kind == "io"
+
+
+@pytest.mark.parametrize(
+    ("text", "line", "message"),
+    [
+        ("t,u,y\n0,1,0\n\n1,1,1e300\n", 4, "column 'y' holds 1e+300: signals must stay within"),
+        ("t,u,y\n0,1,0\n1e308,1,1\n", 3, "column 't' holds 1e+308: times must stay within 1e+15"),
+        ("t,u,y\n0,1,0\n2,1,1\n1,1,0\n", 4, "the times (column 't') must increase strictly"),
+        ("a,b,c\n0,1,0\n", 1, "no column 't' (the header names a, b, c): name the time"),
+        ("t;u;y\n0;1;0\n1;1e300;1\n", 3, "column 'u' holds 1e+300"),
+    ],
+)
+def test_what_is_wrong_in_a_csv_file_is_reported_at_its_line(work, capsys, text, line, message):
+    (work / "bad.csv").write_text(text)
+    status, out, err = run(capsys, "fit", "m.bg", "--data", "bad.csv", "--json")
+    (error,) = json.loads(out)["errors"]
+    assert status == 2 and f"bad.csv:{line}: {message}" in err
+    assert (error["file"], error["line"], error["kind"]) == ("bad.csv", line, "bad_data")

@@ -343,7 +343,8 @@ class Model:
         try:
             return records.read(self._estimator, str(path), records.columns(columns))
         except (OSError, ValueError) as exc:
-            raise MttError(str(exc), kind="bad_argument", file=str(path)) from None
+            line = getattr(exc, "line", None)  # a CSVError's or a located DataError's
+            raise MttError(str(exc), kind="bad_argument", file=str(path), line=line) from None
 
     def estimate(
         self, t, u, y, *, k0, beta: float = 0.1, S0: float = 1e-4, C=None, hold: str = "linear",

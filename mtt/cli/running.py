@@ -49,6 +49,8 @@ def guarded(action: Callable[[argparse.Namespace], int]) -> Callable[[argparse.N
             return status
         except DataError as exc:
             message = as_options(exc)
+            if exc.path is not None:  # a data file's content: its file and line
+                where = {"file": exc.path, "kind": "bad_data", "line": exc.line}
         except (UsageError, ValueError) as exc:
             message = str(exc)
             if getattr(exc, "path", None) is not None:  # a module's CSVError, or as one

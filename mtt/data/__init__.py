@@ -15,9 +15,10 @@ class DataError(ValueError):
     """Data or experiment settings that do not make a record; `names` are the parameters
     its message names, by their Python names (a command line says its options instead)."""
 
-    def __init__(self, message: str, *names: str):
+    def __init__(self, message: str, *names: str, path: str | None = None, line: int | None = None):
         super().__init__(message)
         self.names = names
+        self.path, self.line = path, line  # a data file's problem: where (as a CSVError)
 
 
 def default_hold(signal: str | None, measured: bool) -> str:

@@ -77,17 +77,54 @@ def read(module: ModuleType, path: str, names: Sequence[str] = COLUMNS) -> Recor
             raise
         raise DataError(
             f"{text}: name the time, input and output with columns T,U,Y (now {','.join(names)})",
-            "columns",
-        ) from None
+            "columns", path=str(path), line=getattr(error, "line", None),
+        ) from None  # fmt: skip
+    _check_values(module, path, names, t, u, y)
     late = np.flatnonzero(np.diff(t) <= 0)
     if late.size:  # named here: the module's message cannot name the file
         i = int(late[0])
         later, earlier = float(t[i + 1]), float(t[i])
+        line = _line_of_row(path, delimiter, i + 1)
         raise DataError(
-            f"{path}: the times (column {names[0]!r}) must increase strictly: "
-            f"{later!r} (data row {i + 2}) follows {earlier!r} (data row {i + 1})"
-        )
+            f"{path}:{line}: the times (column {names[0]!r}) must increase strictly: "
+            f"{later!r} (data row {i + 2}) follows {earlier!r} (data row {i + 1})",
+            path=str(path), line=line,
+        )  # fmt: skip
     return Record(t, u, y, None, None, f"{t.size} samples from {path}")
+
+
+def _check_values(module: ModuleType, path: str, names: Sequence[str], *columns) -> None:
+    """Every value within what the estimator takes (the module's MAX_TIME for times,
+    MAX_SIGNAL for signals), else a DataError at the file's line."""
+    limits = (getattr(module, "MAX_TIME", 1e15), *[getattr(module, "MAX_SIGNAL", 1e150)] * 2)
+    whys = (
+        "times must stay within {:g} in size; count time from the record's start",
+        "signals must stay within {:g} in size; scale them to units nearer 1",
+        "signals must stay within {:g} in size; scale them to units nearer 1",
+    )
+    for name, column, limit, why in zip(names, columns, limits, whys, strict=True):
+        beyond = np.flatnonzero(np.abs(column) > limit)
+        if beyond.size:
+            i = int(beyond[0])
+            line = _line_of_row(path, _delimiter(path), i)
+            raise DataError(
+                f"{path}:{line}: column {name!r} holds {column[i]:g}: {why.format(limit)}",
+                path=str(path), line=line,
+            )  # fmt: skip
+
+
+def _line_of_row(path: str, delimiter: str, row: int) -> int | None:
+    """The line (from 1) of data row `row` (from 0) of a CSV file, counted as the module's
+    reader counts (blank rows skipped, the header first); None if the file changed."""
+    with open(path, encoding="utf-8-sig", newline="") as file:
+        rows = csv.reader(file, delimiter=delimiter)
+        seen = -1  # the header
+        for cells in rows:
+            if any(cell.strip() for cell in cells):
+                if seen == row:
+                    return rows.line_num
+                seen += 1
+    return None
 
 
 DELIMITERS = (",", ";", "\t", "|")
