@@ -93,13 +93,15 @@ def equilibria(ss: NonlinearStateSpace, u0: sympy.Expr, values: dict) -> Equilib
         return Equilibria(u0, _numeric_branches(ss, f, u0, values), "numeric")
     # abs, sign, max, min: which side of each a steady state is on is found numerically,
     # then the equations of that side are solved exactly
+    # (a root is polished in 30 digits only where no exact branch replaces it)
     branches = []
-    for found in _numeric_branches(ss, f, u0, values):
-        local = {**values, **{x: sympy.Float(v, 17) for x, v in found.numeric.items()}}
+    for root in _numeric_roots(ss, f, u0, values):
+        found = dict(zip(ss.states, map(float, root), strict=True))
+        local = {**values, **{x: sympy.Float(v, 17) for x, v in found.items()}}
         smooth = sympy.Matrix([settled(e, local) for e in f])
         side = _exact(ss, smooth, u0, values) or ()
-        same = [b for b in side if _close(b.numeric, found.numeric)]
-        branches.append(same[0] if same else found)
+        same = [b for b in side if _close(b.numeric, found)]
+        branches.append(same[0] if same else _numeric_branch(ss, f, u0, values, root))
     method = "exact" if branches and all(b.exact for b in branches) else "numeric"
     return Equilibria(u0, tuple(branches), method)
 
@@ -233,8 +235,13 @@ def _scale(numeric: dict) -> float:
 
 
 def _numeric_branches(ss, f: sympy.Matrix, u0, values: dict) -> tuple[Branch, ...]:
+    """Steady states found numerically (`_numeric_roots`), each polished to 30 digits."""
+    return tuple(_numeric_branch(ss, f, u0, values, x) for x in _numeric_roots(ss, f, u0, values))
+
+
+def _numeric_roots(ss, f: sympy.Matrix, u0, values: dict) -> list:
     """Steady states found by scipy's root finder from many starting points (a grid of
-    scales and signs, seeded): distinct ones, each to `NUMERIC_TOLERANCE`."""
+    scales and signs, seeded): distinct ones, each to `NUMERIC_TOLERANCE`, in order."""
     import numpy as np
     import scipy.optimize
 
@@ -245,7 +252,7 @@ def _numeric_branches(ss, f: sympy.Matrix, u0, values: dict) -> tuple[Branch, ..
         message = f"a numeric steady state needs values for {missing}"
         raise ModelError(ss.source, [error("missing_value", message)])
     # the Jacobian by scipy's differences: printing it for lambdify costs more than that
-    function = sympy.lambdify([states], list(substituted), modules="numpy", dummify=True)
+    function = sympy.lambdify([states], list(substituted), modules="numpy")
     rng = np.random.default_rng(0)
     found: list[np.ndarray] = []
     for start in _starts(len(states), rng):
@@ -271,21 +278,22 @@ def _numeric_branches(ss, f: sympy.Matrix, u0, values: dict) -> tuple[Branch, ..
             continue
         found.append(x)
     found.sort(key=lambda x: tuple(x))
-    branches = []
-    for x in found:
-        point = _polished(substituted, states, x)
-        y = ss.g[0].xreplace({ss.input: u0, **point}).xreplace(values)
-        y_value = number(y, {})
-        branches.append(
-            Branch(
-                MappingProxyType(point),
-                MappingProxyType({s: float(v) for s, v in zip(states, x, strict=True)}),
-                y,
-                y_value.real if is_real(y_value) else math.nan,
-                False,
-            )
-        )
-    return tuple(branches)
+    return found
+
+
+def _numeric_branch(ss, f: sympy.Matrix, u0, values: dict, x) -> Branch:
+    """The branch of a numeric root, polished to 30 digits, with its output."""
+    states = list(ss.states)
+    point = _polished(f.xreplace(values), states, x)
+    y = ss.g[0].xreplace({ss.input: u0, **point}).xreplace(values)
+    y_value = number(y, {})
+    return Branch(
+        MappingProxyType(point),
+        MappingProxyType({s: float(v) for s, v in zip(states, x, strict=True)}),
+        y,
+        y_value.real if is_real(y_value) else math.nan,
+        False,
+    )
 
 
 def _polished(f: sympy.Matrix, states: list, x) -> dict:
