@@ -119,13 +119,22 @@ def signal_label(module: ModuleType, role: str) -> str:
     return f"{role}: {quantity} {where} {name} ({label})"
 
 
-def cmd_compile(args) -> int:
+def _nonlinear(args):
+    """(graph, choice) of a nonlinear model given no operating point (whose module is
+    its simulator, not an estimator), else None."""
     choice = choice_from_args(args)
     if choice.at is None:
         graph = pipeline.load(args.file, choice.selection)
-        if nonlinear_parts(graph):  # no operating point: the nonlinear model's simulator
-            return _compile_simulator(args, graph, choice)
-    theta = pipeline.theta_for(args.file, choice)
+        if nonlinear_parts(graph):
+            return graph, choice
+    return None
+
+
+def cmd_compile(args) -> int:
+    nonlinear = _nonlinear(args)
+    if nonlinear:  # no operating point: the nonlinear model's simulator
+        return _compile_simulator(args, *nonlinear)
+    theta = pipeline.theta_for(args.file, choice_from_args(args))
     source = codegen.render(theta)
     path = codegen.output_path(args.path, theta)
     files.write_atomic(path, source)
@@ -168,7 +177,16 @@ def _compile_simulator(args, graph, choice) -> int:
 def cmd_simulate(args) -> int:
     from mtt.present import plots  # matplotlib: a quarter second, paid by plotting only
 
-    module = module_for(args)
+    nonlinear = _nonlinear(args)
+    if nonlinear:  # the nonlinear model itself (from rest), by its generated simulator
+        graph, choice = nonlinear
+        system, values = pipeline.state_equations_for(graph, choice)
+        description = graph.description
+        module = checked_module(
+            nonlinear_codegen.load(system, values=values, description=description)
+        )
+    else:
+        module = module_for(args)
     (data,) = experiment_data(module, args)
     if args.data_plot:
         plots.data(
