@@ -7,9 +7,10 @@ exponential, one lfilter recursion per pole, scipy.optimize.least_squares over k
 at k = 5), told like the fits that the record starts at rest without offset; it is the
 least-squares estimate of the output error, the maximum-likelihood one for Gaussian noise.
 Its simulation is checked against the module's `simulate` (to 1e-10) before anything is
-timed. Against it: the generated module's `fit` (no starting value), by
-refined instrumental variables (its default) and by least squares (the global minimiser of
-the filtered equation-error cost, C(s) = (1 + s)^5, beta = 0), both told the record starts
+timed. Against it: the generated module's `fit` (no starting value), by its default
+(method="pem": the exact prediction error from the paper's global least-squares minimiser)
+and by least squares (the global minimiser of the filtered equation-error cost,
+C(s) = (1 + s)^5, beta = 0), both told the record starts
 at rest without offset, each with its uncertainty and validation and without
 (`uncertainty=False`: the estimate alone, issue 8's fit), and its `estimate` (the paper's
 algorithm from k0 = 5, beta = 0.1, S0 = 1e-4).
@@ -51,7 +52,7 @@ def main() -> None:
     peer.check(dc, t, u, 10.0, hold="linear")
     methods = {
         REFERENCE: lambda y: peer.fit(dc, t, u, y, k0=5.0, **AT_REST).k,
-        "fit (instrumental variables)": lambda y: dc.fit(t, u, y, **AT_REST).k,
+        "fit (defaults: method='pem')": lambda y: dc.fit(t, u, y, **AT_REST).k,
         "fit, method='ls'": lambda y: dc.fit(t, u, y, method="ls", C=None, **AT_REST).k,
         "fit, uncertainty=False": lambda y: dc.fit(t, u, y, uncertainty=False, **AT_REST).k,
         "fit, method='ls', uncertainty=False": lambda y: (
