@@ -1,0 +1,164 @@
+"""The generated nonlinear module's fit (issue 20) on records made independently by
+solve_ivp (tests/nonlinear_records.py): exact on noise-free records, calibrated on noisy
+ones (fixed seeds, tolerances a correct method meets with margin), several records
+jointly, validation on a new record, multiple shooting, profile intervals, and a model
+whose unknowns appear only as a product reported as not identifiable."""
+
+from __future__ import annotations
+
+import math
+import warnings
+
+import numpy as np
+import pytest
+import sympy
+from nonlinear_models import TWO_TANKS_K, two_tanks
+from nonlinear_records import held, noisy, pump, tanks_output, tanks_rhs
+
+from mtt.derivation.nonlinear import NonlinearStateSpace
+from mtt.estimator import nonlinear_codegen
+
+TRUE = np.array(TWO_TANKS_K)
+
+
+@pytest.fixture(scope="module")
+def tanks():
+    values = dict(zip(("c1", "c2", "kp"), TRUE, strict=True))
+    return nonlinear_codegen.load(two_tanks(), values=values)
+
+
+def _record(seed: int, x0=(1.0, 2.0), size: int = 241, k=TRUE, high: float = 0.8):
+    """A pump record between 0.3 and `high`: at 0.8 the upper tank stays below its rim, at
+    1.6 it overflows now and then (events, in the simulator)."""
+    t = np.arange(size) * 0.5
+    u = pump(t, 0.3, high, 20, seed)
+    states = held(tanks_rhs(k), t, u, x0)
+    assert (states[:, 0].max() > 3.1) == (high > 1.2) and states[:, 0].min() < 3
+    return t, u, tanks_output(states), states
+
+
+def _quiet(function, *args, **options):
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        return function(*args, **options)
+
+
+def test_noise_free_records_give_the_unknowns_and_initial_state_exactly(tanks):
+    t, u, y, states = _record(0, high=1.6)  # overflowing
+    found = tanks.fit(t, u, y, k0=[0.6, 0.33, 1.2], hold="zoh", multistart=0)
+    assert found.ok, found.message
+    np.testing.assert_allclose(found.k, TRUE, rtol=1e-6)
+    np.testing.assert_allclose(found.states[0], states[0], rtol=1e-5)
+    assert abs(found.offsets[0]) < 1e-6 and found.fit_percent > 99.999
+    assert found.method == "pem" and found.shooting == "single" and found.identifiable
+    assert found.intervals == ("wald", "wald", "wald")
+
+
+def test_a_noisy_record_is_fitted_within_its_interval(tanks):
+    t, u, y, states = _record(1)
+    found = _quiet(tanks.fit, t, u, noisy(y, 20, seed=1), hold="zoh", multistart=0, profile=None)
+    assert found.ok, found.message
+    assert np.all(found.ci[:, 0] < TRUE) and np.all(found.ci[:, 1] > TRUE)
+    assert np.all(np.abs(found.k - TRUE) < 3 * found.k_se)
+    assert np.all(found.k_se < 0.1 * TRUE)
+    np.testing.assert_allclose(found.ci, found.k[:, None] + np.outer(found.k_se, [-1.96, 1.96]),
+                               rtol=1e-3)  # fmt: skip
+    # the noise's standard deviation, as simulated (20 dB below the output's spread)
+    assert found.noise_std == pytest.approx(np.std(y) / 10, rel=0.15)
+    assert found.covariance.shape == (3, 3) and found.minima.shape[1] == 3
+
+
+def test_records_are_fitted_jointly_and_a_new_record_is_validated(tanks):
+    first, second, new = _record(2, (1.0, 2.0)), _record(3, (2.5, 1.0)), _record(4, (0.5, 3.0))
+    ys = [noisy(record[2], 20, seed) for seed, record in enumerate((first, second, new))]
+    found = _quiet(tanks.fit, [first[0], second[0]], [first[1], second[1]], ys[:2], hold="zoh",
+                   multistart=0, profile=None)  # fmt: skip
+    assert found.ok, found.message
+    assert len(found.states) == len(found.offsets) == len(found.fitted) == 2
+    np.testing.assert_allclose(found.states[1], second[3][0], rtol=0.15)
+    assert np.all(np.abs(found.k - TRUE) < 3 * found.k_se)
+    compared = found.compare(new[0], new[1], ys[2])
+    truth = ys[2] - new[2]  # the simulation with the true unknowns and initial state
+    true_fit = 100 * (1 - np.linalg.norm(truth) / np.linalg.norm(ys[2] - ys[2].mean()))
+    assert abs(compared.fit_percent - true_fit) < 1.0
+    assert compared.initial_state[1] == pytest.approx(new[3][0, 1], rel=0.05)  # observed
+    assert compared.samples == new[0].size and "estimated" in compared.estimated
+    fitted = found.simulate(new[0], new[1], initial_state="estimate", y=ys[2])
+    np.testing.assert_allclose(fitted, compared.fitted)
+
+
+def test_multiple_shooting_reaches_the_same_minimum(tanks):
+    t, u, y, _ = _record(5, size=121)
+    y = noisy(y, 20, seed=5)
+    options = dict(hold="zoh", multistart=0, profile=None)
+    single = _quiet(tanks.fit, t, u, y, shooting="single", **options)
+    multiple = _quiet(tanks.fit, t, u, y, shooting="multiple", segments=4, **options)
+    assert multiple.shooting == "multiple" and single.shooting == "single"
+    np.testing.assert_allclose(multiple.k, single.k, rtol=1e-6)
+
+
+def test_a_poor_start_is_rescued_by_the_multistart_and_every_minimum_is_listed(tanks):
+    t, u, y, _ = _record(6)
+    found = _quiet(tanks.fit, t, u, y, k0=[4.0, 0.05, 0.2], hold="zoh", multistart=3,
+                   bounds=[(0.1, 2.0), (0.1, 2.0), (0.2, 5.0)])  # fmt: skip
+    np.testing.assert_allclose(found.k, TRUE, rtol=1e-6)
+    assert [origin for origin, _, _ in found.starts][:1] == ["k0"]
+    assert len(found.starts) == 5  # k0, the model file's values, three quasi-random points
+    np.testing.assert_allclose(found.minima[0], found.k)
+    assert np.all(np.diff(found.minima_costs) > 0)
+
+
+def test_the_profile_interval_ends_where_the_refitted_cost_rises_by_3_84_variances(tanks):
+    t, u, y, _ = _record(7)
+    y = noisy(y, 20, seed=7)
+    found = _quiet(tanks.fit, t, u, y, hold="zoh", multistart=0, profile="kp")
+    assert found.intervals == ("wald", "wald", "profile")
+    wald = found.k[2] + 1.96 * found.k_se[2] * np.array([-1.0, 1.0])
+    assert found.ci[2, 1] - wald[1] > 0.05 * (wald[1] - wald[0])  # skewed: not quadratic
+    rss = sum(float(r @ r) for r in found.residuals)
+    for end in found.ci[2]:  # kp held at the end (a box of width 1e-9), the rest refitted
+        bounds = [(0.05, 5.0), (0.05, 5.0), (end, end * (1 + 1e-9))]
+        held_there = _quiet(tanks.fit, t, u, y, k0=found.k, hold="zoh", multistart=0,
+                            bounds=bounds, profile=None)  # fmt: skip
+        rise = sum(float(r @ r) for r in held_there.residuals) - rss
+        assert rise / found.noise_std**2 == pytest.approx(3.84, abs=0.1)
+
+
+def _product_tank() -> NonlinearStateSpace:
+    """One tank filled by a pump of gain a b and drained through an orifice c: a and b
+    appear only as their product."""
+    x, u, y = sympy.symbols("x u y")
+    a, b, c = sympy.symbols("a b c")
+    f = sympy.Matrix([a * b * u - c * sympy.sqrt(x)])
+    return NonlinearStateSpace("product_tank", (x,), u, y, (a, b, c), {}, f, sympy.Matrix([x]))
+
+
+def test_two_unknowns_seen_only_as_a_product_are_reported_not_identifiable():
+    module = nonlinear_codegen.load(_product_tank(), values=dict(a=2.0, b=0.5, c=0.5))
+    t = np.arange(201) * 0.5
+    u = pump(t, 0.3, 1.0, 20, seed=8)
+    states = held(lambda x, v: [1.0 * v - 0.5 * math.sqrt(max(x[0], 0.0))], t, u, [1.0])
+    with pytest.warns(module.EstimationWarning, match="a\\*b"):
+        found = module.fit(t, u, noisy(states[:, 0], 30, seed=8), hold="zoh", multistart=0)
+    assert not found.ok and not found.identifiable
+    assert found.determined == "the output depends on a and b only through a*b"
+    assert np.all(np.isinf(found.k_se[:2]))
+    assert found.k[0] * found.k[1] == pytest.approx(1.0, rel=0.02)
+    assert found.message.startswith("the unknowns are not separately determined")
+
+
+@pytest.mark.parametrize(
+    ("options", "message"),
+    [
+        (dict(shooting="twice"), "shooting must be one of"),
+        (dict(x0=[1.0, 2.0, 3.0]), "x0 must end in an axis of the 2 values"),
+        (dict(profile="c3"), "profile must be 'auto', None or an unknown's name"),
+        (dict(segments=1), "segments must be a whole number >= 2"),
+        (dict(k0=[1.0, 2.0]), "k0 must give the 3 unknowns"),
+        (dict(bounds=[(1.0, 0.5), (0.1, 1.0), (0.1, 2.0)]), "lo < hi"),
+    ],
+)
+def test_arguments_are_checked(tanks, options, message):
+    t = np.arange(50) * 0.5
+    with pytest.raises(ValueError, match=message):
+        tanks.fit(t, np.ones(t.size), np.ones(t.size), **options)
