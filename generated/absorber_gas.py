@@ -2808,9 +2808,23 @@ def moments(t, u, y, *, k=None, C=None, hold: str = "linear", offset: bool = Tru
 # equation error is the output noise coloured by A(s, k)/C(s), and its variance follows from
 # how each noise sample moves J' (the filters' adjoints, below).
 
+# Whiteness: whether residuals look like white noise (linear and nonlinear fits alike) ---------
+
 WHITENESS_LAGS = 20  # residual autocorrelations tested
 WHITENESS_LEVEL = 5.0  # Q beyond its mean + LEVEL std when white: about 1e-4 false alarms
 CLEAN = 1e-5  # residuals below this fraction of the output's spread are noise-free data
+
+
+def _whiteness(r: np.ndarray) -> float:
+    """Ljung-Box Q of the residuals over WHITENESS_LAGS lags (about chi-square when white)."""
+    r = r - r.mean()
+    lags = min(WHITENESS_LAGS, r.size // 4)
+    power = r @ r
+    if lags < 1 or power == 0:
+        return 0.0
+    rho = np.array([r[:-lag] @ r[lag:] for lag in range(1, lags + 1)]) / power
+    return float(r.size * (r.size + 2) * np.sum(rho**2 / (r.size - np.arange(1, lags + 1))))
+
 
 
 @dataclass(frozen=True)
@@ -2852,17 +2866,6 @@ def _filter_derivatives(f: np.ndarray, t: np.ndarray, W, holds, needs) -> list[n
         S = _derivatives(f, (need,))
         out.append(z @ S[:, :order].T + np.outer(w, S[:, order]))
     return out
-
-
-def _whiteness(r: np.ndarray) -> float:
-    """Ljung-Box Q of the residuals over WHITENESS_LAGS lags (about chi-square when white)."""
-    r = r - r.mean()
-    lags = min(WHITENESS_LAGS, r.size // 4)
-    power = r @ r
-    if lags < 1 or power == 0:
-        return 0.0
-    rho = np.array([r[:-lag] @ r[lag:] for lag in range(1, lags + 1)]) / power
-    return float(r.size * (r.size + 2) * np.sum(rho**2 / (r.size - np.arange(1, lags + 1))))
 
 
 def _validate(Theta, record, k, *, method, c, hold, offset, initial_state, weights,
@@ -3195,6 +3198,9 @@ def _triangular(Phi: np.ndarray, drive: np.ndarray, z0: np.ndarray, blocks, out)
 INITIAL_STATES = ("zero", "estimate")  # Fit.simulate: from rest, or fitted to the record
 
 
+# The figures of a fitted model against one record (linear and nonlinear modules alike) ---------
+
+
 @dataclass(frozen=True)
 class Comparison:
     """A fitted model against one record (`Fit.compare`), usually one it was not fitted to.
@@ -3203,7 +3209,8 @@ class Comparison:
     RMS of y - y^; y^ the model's output with the record's own output offset and initial
     state estimated by least squares (`estimated` says so: a new record starts wherever the
     system was, not at the fit's operating point); offset, initial_state: those estimates
-    (x(t_0) in scipy.signal.tf2ss's realisation of G(s, k^)); samples: the record's length;
+    (x(t_0): for a linear model in scipy.signal.tf2ss's realisation of G(s, k^), for a
+    nonlinear one in the order of STATES); samples: the record's length;
     fitted, residuals: y^ and y - y^ (None once `without_signals` dropped them).
     """
 
@@ -3218,6 +3225,24 @@ class Comparison:
 
     def without_signals(self) -> "Comparison":
         return replace(self, fitted=None, residuals=None)
+
+
+def comparison_record(comparison: Comparison) -> dict:
+    """A Comparison (Fit.compare) as plain JSON-able values, without its signals."""
+    return dict(
+        fit_percent=_plain(comparison.fit_percent), residual_rms=_plain(comparison.residual_rms),
+        offset=_plain(comparison.offset), initial_state=_plain(comparison.initial_state),
+        samples=comparison.samples, estimated=comparison.estimated,
+    )  # fmt: skip
+
+
+def _plain(value):
+    """JSON for numbers, arrays and tuples of them: floats (None where not finite), lists."""
+    if isinstance(value, tuple | list) or np.ndim(value) > 0:
+        return [_plain(part) for part in value]
+    value = float(value)
+    return value if math.isfinite(value) else None
+
 
 
 def _compare(t, u, y, k, *, hold: str, known: dict) -> Comparison:
@@ -5181,23 +5206,6 @@ def fit_record(result: Fit) -> dict:
         initial_states=[_plain(state) for state in result.states],
         exact_cost=_plain(result.exact_cost), absorbed=_plain(result.absorbed),
     )  # fmt: skip
-
-
-def comparison_record(comparison: Comparison) -> dict:
-    """A Comparison (Fit.compare) as plain JSON-able values, without its signals."""
-    return dict(
-        fit_percent=_plain(comparison.fit_percent), residual_rms=_plain(comparison.residual_rms),
-        offset=_plain(comparison.offset), initial_state=_plain(comparison.initial_state),
-        samples=comparison.samples, estimated=comparison.estimated,
-    )  # fmt: skip
-
-
-def _plain(value):
-    """JSON for numbers, arrays and tuples of them: floats (None where not finite), lists."""
-    if isinstance(value, tuple | list) or np.ndim(value) > 0:
-        return [_plain(part) for part in value]
-    value = float(value)
-    return value if math.isfinite(value) else None
 
 
 def _estimate_main(args, known) -> tuple[dict, list[str], int]:

@@ -3230,6 +3230,23 @@ class Comparison:
         return replace(self, fitted=None, residuals=None)
 
 
+def comparison_record(comparison: Comparison) -> dict:
+    """A Comparison (Fit.compare) as plain JSON-able values, without its signals."""
+    return dict(
+        fit_percent=_plain(comparison.fit_percent), residual_rms=_plain(comparison.residual_rms),
+        offset=_plain(comparison.offset), initial_state=_plain(comparison.initial_state),
+        samples=comparison.samples, estimated=comparison.estimated,
+    )  # fmt: skip
+
+
+def _plain(value):
+    """JSON for numbers, arrays and tuples of them: floats (None where not finite), lists."""
+    if isinstance(value, tuple | list) or np.ndim(value) > 0:
+        return [_plain(part) for part in value]
+    value = float(value)
+    return value if math.isfinite(value) else None
+
+
 
 def _compare(t, u, y, k, *, hold: str, known: dict) -> Comparison:
     t, u, y = _in_range(_signals(("t", t), ("u", u), ("y", y), minimum=2), "")
@@ -5192,23 +5209,6 @@ def fit_record(result: Fit) -> dict:
         initial_states=[_plain(state) for state in result.states],
         exact_cost=_plain(result.exact_cost), absorbed=_plain(result.absorbed),
     )  # fmt: skip
-
-
-def comparison_record(comparison: Comparison) -> dict:
-    """A Comparison (Fit.compare) as plain JSON-able values, without its signals."""
-    return dict(
-        fit_percent=_plain(comparison.fit_percent), residual_rms=_plain(comparison.residual_rms),
-        offset=_plain(comparison.offset), initial_state=_plain(comparison.initial_state),
-        samples=comparison.samples, estimated=comparison.estimated,
-    )  # fmt: skip
-
-
-def _plain(value):
-    """JSON for numbers, arrays and tuples of them: floats (None where not finite), lists."""
-    if isinstance(value, tuple | list) or np.ndim(value) > 0:
-        return [_plain(part) for part in value]
-    value = float(value)
-    return value if math.isfinite(value) else None
 
 
 def _estimate_main(args, known) -> tuple[dict, list[str], int]:

@@ -56,3 +56,16 @@ def tanks_rhs(k):
 
 def tanks_output(states: np.ndarray) -> np.ndarray:
     return states[:, 1] / 1.5
+
+
+def weir_rhs(k):
+    """models/two_tanks.bg at its unknowns k = (a1, a2): areas 50 and 40, the upper tank
+    spilling over its rim 30 above its orifice as a weir, 20 max(h1 - 30, 0)^(3/2)."""
+    a1, a2 = k
+
+    def rhs(x, u):
+        h1, h2 = max(x[0] / 50, 0.0), max(x[1] / 40, 0.0)
+        fall = a1 * math.sqrt(h1) + 20 * max(h1 - 30, 0.0) ** 1.5
+        return [u - fall, fall - a2 * math.sqrt(h2)]
+
+    return rhs

@@ -12,7 +12,7 @@ from types import ModuleType
 import numpy as np
 
 from mtt import files
-from mtt.api import systems
+from mtt.api import nonlinear_fits, systems
 from mtt.api.exact import exact, exact_point
 from mtt.api.fits import Fit, delegate
 from mtt.api.matrix import TransferMatrix
@@ -373,11 +373,10 @@ class Model:
         bounds=None, offset: bool = True, initial_state: bool = True, hold: str = "linear",
         beta: float = 0.0, uncertainty: bool = True, **known: float,
     ) -> Fit:  # fmt: skip
-        """The generated module's batch `fit` -> Fit: k over whole records (lists of arrays
-        for several), the minimiser of the exact prediction error with a noise model, with
-        k_se, ci, fit_percent, noise, warnings and ok; it prints as `mtt fit` does
-        (`summary()`) and shows as a table in Jupyter. With several inputs or outputs, u
-        and y have a column per signal (or are dicts by name): the module's `fit_signals`.
+        """The generated module's batch `fit` -> Fit: k over whole records (lists of arrays for
+        several), the minimiser of the exact prediction error with a noise model, with k_se,
+        ci, fit_percent, noise, warnings and ok; it prints as `mtt fit` does (`summary()`). With
+        several inputs or outputs, u and y have a column per signal: `fit_signals`.
 
         >>> import mtt, numpy as np
         >>> rlc = mtt.load(mtt.example("rlc"))
@@ -394,6 +393,8 @@ class Model:
         if self.bondgraph.several:  # u, y: a column (or a dict entry) per input, per output
             return delegate(self._estimator.fit_signals, t, u, y, **options, **known)
         options.update(method=method, beta=beta, uncertainty=uncertainty)
+        if self._simulates:  # a nonlinear model: prediction error (docs/nonlinear_fit.md)
+            return nonlinear_fits.fit(self, t, u, y, **options, **known)
         result = delegate(self._estimator.fit, t, u, y, **options, **known)
         records = [t] if np.ndim(t[0]) == 0 else t  # one record, or a list of them
         return Fit(result, self._estimator, tuple(f"{np.size(r)} samples" for r in records))

@@ -114,6 +114,8 @@ def signal_label(module: ModuleType, role: str) -> str:
     if description:
         return f"{description} ({label})"
     kind, _, name = label.partition(":")
+    if not name:  # a simulator names its signals by their symbols (u, y)
+        return f"{role} ({label})"
     quantity = "effort" if kind in ("Se", "De") else "flow"
     where = "of the source" if role == "input" else "at the detector"
     return f"{role}: {quantity} {where} {name} ({label})"

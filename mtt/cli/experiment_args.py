@@ -256,7 +256,9 @@ def register(commands) -> None:
         "sampled-data prediction error (from the global minimiser of the paper's "
         "least-squares cost), with a noise model chosen by the BIC, offsets and initial state "
         "estimated; print the estimate, its standard error and 95 % interval, the fit, the "
-        "noise model and every warning. Exit status 1 when there is no estimate or a "
+        "noise model and every warning. A nonlinear model (without --at) is fitted by "
+        "prediction error with its simulator, from the small-signal model's estimate and a "
+        "multistart. Exit status 1 when there is no estimate or a "
         "diagnostic contradicts it (the reason is printed).",
     )
     fit.add_argument("file", metavar="FILE")
@@ -309,6 +311,19 @@ def register(commands) -> None:
         type=float,
         default=0.0,
         help="iv and ls only: weigh each sample by e^(-beta (t_end - t)) (default 0)",
+    )
+    group.add_argument(
+        "--shooting",
+        choices=("auto", "single", "multiple"),
+        help="a nonlinear model's fit: simulate each record whole (single), in segments joined "
+        "by continuity (multiple), or multiply where single shooting fails (auto, the default)",
+    )
+    group.add_argument(
+        "--multistart",
+        type=int,
+        metavar="N",
+        help="a nonlinear model's fit: N quasi-random starts over the bounds besides the "
+        "small-signal model's estimate, --k0 and the file's values (default 4)",
     )
     outputs = fit.add_argument_group("outputs")
     outputs.add_argument(

@@ -10,6 +10,9 @@ from mtt.cli.running import UsageError
 
 def options(module, args) -> dict:
     """The module's `fit` options from the command line (k0 and bounds by unknown)."""
+    given = [flag for flag in ("shooting", "multistart") if getattr(args, flag) is not None]
+    if given:
+        raise UsageError(f"--{given[0]} is an option of a nonlinear model's fit")
     return dict(
         method=args.method, noise=args.noise, C=_filter(args),
         k0=None if args.k0 is None else unknowns.point(module, args.k0, "--k0"),
@@ -25,3 +28,19 @@ def _filter(args):
     if args.filter_T is not None:
         return args.filter_T
     return "auto" if args.filter is None else args.filter.strip()
+
+
+def nonlinear_options(module, args) -> dict:
+    """The options of a nonlinear model's fit (mtt.api.nonlinear_fits.fit): those of the
+    linear fit that apply, --shooting and --multistart; --method, --noise, --filter and
+    --beta (linear options) are refused there unless at their defaults."""
+    found = dict(
+        k0=None if args.k0 is None else unknowns.point(module, args.k0, "--k0"),
+        bounds=unknowns.bounds(module, args.bounds), offset=args.offset,
+        initial_state=args.initial_state, hold=hold_of(args),
+        method=args.method, noise=args.noise, C=_filter(args), beta=args.beta,
+    )  # fmt: skip
+    for flag in ("shooting", "multistart"):
+        if getattr(args, flag) is not None:
+            found[flag] = getattr(args, flag)
+    return found

@@ -14,10 +14,16 @@ from itertools import zip_longest
 import numpy as np
 
 from mtt import files
-from mtt.cli.experiment import experiment_data, module_for, signal_label
-from mtt.cli.fit_options import options
+from mtt.api import nonlinear_fits
+from mtt.api.model import Model
+from mtt.cli.experiment import checked_module, experiment_data, module_for, signal_label
+from mtt.cli.fit_options import nonlinear_options, options
+from mtt.cli.options import choice_from_args
 from mtt.cli.running import EXIT_OK, EXIT_STOPPED, UsageError, say, warn
 from mtt.data.records import columns, read
+from mtt.derivation import pipeline
+from mtt.derivation.nonlinear import nonlinear_parts
+from mtt.language.diagnostics import MttError
 from mtt.present import fits, tables
 
 
@@ -27,18 +33,27 @@ def cmd_fit(args) -> int:
     kind = batch.mode(args)  # --data patterns, --per-record, --jobs...: mtt.batch
     if kind is not None:
         return batch.cmd_fit_many(args, kind)
-    module = module_for(args, several=True)
-    if hasattr(module, "theta_channels"):  # several inputs or outputs
-        from mtt.cli.signals import cmd_fit_signals
+    model = nonlinear_model(args)  # a nonlinear model without --at: its simulator's fit
+    if model is not None:
+        module = checked_module(model.simulator())
+    else:
+        module = module_for(args, several=True)
+        if hasattr(module, "theta_channels"):  # several inputs or outputs
+            from mtt.cli.signals import cmd_fit_signals
 
-        return cmd_fit_signals(args, module)
+            return cmd_fit_signals(args, module)
     records = experiment_data(module, args, several=True)
     held_out = validation_data(module, args)  # read first: a wrong path fails before the fit
     arrays = [[getattr(data, name) for data in records] for name in ("t", "u", "y")]
     if len(records) == 1:
         arrays = [part[0] for part in arrays]
     try:
-        result = module.fit(*arrays, **options(module, args))
+        if model is not None:
+            result = nonlinear_fits.fit(model, *arrays, **nonlinear_options(module, args)).result
+        else:
+            result = module.fit(*arrays, **options(module, args))
+    except MttError as error:  # the nonlinear fit's refusals (bad_argument)
+        raise UsageError(_files_named(str(error), records)) from None
     except ValueError as error:  # "record 1 has 3 samples": name the file
         if len(records) == 1:
             raise
@@ -86,6 +101,15 @@ def cmd_fit(args) -> int:
         lines = [(data.note, c) for data, c in zip(held_out, compared, strict=False)]
         say("\n".join([fits.fit_text(module, records, result), *fits.validation_lines(lines)]))
     return EXIT_OK if result.ok else EXIT_STOPPED
+
+
+def nonlinear_model(args):
+    """The Model (mtt.api) of a nonlinear model given without --at, else None."""
+    choice = choice_from_args(args)
+    if choice.at is not None:
+        return None
+    graph = pipeline.load(args.file, choice.selection)
+    return Model(graph, choice) if nonlinear_parts(graph) else None
 
 
 def validation_data(module, args) -> list:

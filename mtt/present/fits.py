@@ -64,9 +64,11 @@ def fit_text(module, records, result) -> str:
         return "\n".join(lines)
     if not result.ok:
         lines.append(f"  not ok: {result.warnings[0] if result.warnings else result.message}")
+    lines += uncertainty_lines(module, result.k, result.k_se, result.ci)
+    if getattr(result, "shooting", None):  # a nonlinear model's (its simulator's fit)
+        return "\n".join(lines + prediction_error_lines(module, result))
     steps = {"pem": "Gauss-Newton steps", "iv": "iterations"}.get(result.method)
     steps = f", {result.iterations} {steps}" if steps else ""
-    lines += uncertainty_lines(module, result.k, result.k_se, result.ci)
     if len(module.UNKNOWNS) == 1:
         minima = ", ".join(f"{value:.6g}" for value in result.minima)
     else:
@@ -84,6 +86,34 @@ def fit_text(module, records, result) -> str:
     if any(result.offsets):
         lines.append("  output offset at rest: " + ", ".join(f"{v:.6g}" for v in result.offsets))
     return "\n".join(lines)
+
+
+def prediction_error_lines(module, result) -> list[str]:
+    """A nonlinear fit's figures after its estimates: the fit, how it was reached (the
+    shooting, the Gauss-Newton steps, every start and the minimum each reached), the
+    profile-likelihood intervals, and per record its initial state and output offset."""
+    lines = [
+        f"  fit {result.fit_percent:.4g} %, residual RMS {result.residual_rms:.3g}, "
+        f"noise std {result.noise_std:.3g}",
+        f"  method: prediction error with the nonlinear model ({result.shooting} shooting, "
+        f"{result.iterations} Gauss-Newton steps)",
+    ]
+    profiled = [
+        n for n, kind in zip(module.UNKNOWNS, result.intervals, strict=True) if kind == "profile"
+    ]
+    if profiled:
+        lines.append(f"  95 % interval of {', '.join(profiled)}: profile likelihood (the cost is "
+                     "far from quadratic there)")  # fmt: skip
+    for origin, _, reached in result.starts:
+        point = None if reached is None else np.ravel(reached)
+        if point is not None and point.size == 1:
+            point = point[0]  # one unknown: values.named takes a float
+        end = "no minimum" if point is None else f"reached {values.named(module, point)}"
+        lines.append(f"  start {origin}: {end}")
+    for number, (x0, offset) in enumerate(zip(result.states, result.offsets, strict=True), 1):
+        state = ", ".join(f"{name} = {v:.6g}" for name, v in zip(module.STATES, x0, strict=True))
+        lines.append(f"  record {number}: initial state {state}; output offset {offset:.6g}")
+    return lines
 
 
 def validation_lines(compared) -> list[str]:

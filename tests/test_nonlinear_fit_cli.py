@@ -1,0 +1,107 @@
+"""`mtt fit` and `Model.fit` on a nonlinear model (issue 20 item 1): models/two_tanks.bg
+fitted by prediction error with its simulator, from the small-signal model's estimate, on
+records made independently by solve_ivp (tests/nonlinear_records.py), a held-out record
+validated; the linear fit's own options refused with a message."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+from nonlinear_records import held, noisy, pump, weir_rhs
+
+import mtt
+from mtt.cli.main import main
+
+ROOT = Path(__file__).resolve().parent.parent
+MODEL = str(ROOT / "models" / "two_tanks.bg")
+TRUE = (2.0, 2.5)  # the model file's values
+
+
+def _record(seed: int, high: float = 16.0):
+    """A pump between 4 and `high` cm^3/s switching every 100 s at most, sampled every 5 s
+    from the steady state at 4; at 16 the upper tank overflows (its level passes 30)."""
+    t = np.arange(400) * 5.0
+    u = pump(t, 4.0, high, 20, seed)
+    states = held(weir_rhs(TRUE), t, u, [50 * (4 / 2.0) ** 2, 40 * (4 / 2.5) ** 2])
+    return t, u, states[:, 1] / 40, states
+
+
+def _write(path: Path, t, u, y) -> str:
+    path.write_text(
+        "t,u,y\n"
+        + "".join(
+            f"{float(a)!r},{float(b)!r},{float(c)!r}\n" for a, b, c in zip(t, u, y, strict=True)
+        )
+    )
+    return str(path)
+
+
+def run_mtt(capsys, *args: str) -> tuple[int, str, str]:
+    try:
+        status = main(list(args))
+    except SystemExit as exit:
+        status = exit.code
+    out, err = capsys.readouterr()
+    return status, out, err
+
+
+def test_mtt_fit_of_a_nonlinear_model_reports_and_validates_as_the_linear_one(tmp_path, capsys):
+    t, u, clean, states = _record(1)
+    assert states[:, 0].max() / 50 > 30  # the record reaches the overflow
+    y = noisy(clean, 20, seed=1)
+    new_t, new_u, new_clean, _ = _record(2)
+    new_y = noisy(new_clean, 20, seed=2)
+    data, held_out = (
+        _write(tmp_path / "a.csv", t, u, y),
+        _write(tmp_path / "b.csv", new_t, new_u, new_y),
+    )
+    status, out, err = run_mtt(capsys, "fit", MODEL, "--data", data, "--validate", held_out,
+                               "--hold", "zoh", "--multistart", "0", "--json")  # fmt: skip
+    assert status == 0, err
+    found = json.loads(out)
+    k, k_se = np.array(found["k"]), np.array(found["k_se"])
+    assert found["ok"] and found["method"] == "pem" and found["unknowns"] == ["a1", "a2"]
+    assert np.all(np.abs(k - TRUE) < 3 * k_se) and np.all(k_se < 0.02 * k)
+    assert found["identifiable"] and found["shooting"] == "single"
+    x0, offset = found["initial_states"][0], found["offsets"][0]
+    assert x0[0] == pytest.approx(states[0, 0], rel=0.02)  # the lower level trades off with
+    assert x0[1] / 40 + offset == pytest.approx(clean[0], abs=3 * np.std(y - clean))  # the offset
+    origins = [start["origin"] for start in found["starts"]]
+    assert origins[-1] == "the model file's values" and len(origins) <= 2
+    truth = 100 * (1 - np.linalg.norm(new_y - new_clean) / np.linalg.norm(new_y - new_y.mean()))
+    assert abs(found["validation"][0]["fit_percent"] - truth) < 1.0
+
+
+@pytest.mark.parametrize(
+    ("model", "options", "message"),
+    [
+        (MODEL, ["--method", "ls"], "method is an option of a linear model's fit"),
+        (MODEL, ["--beta", "0.1"], "beta is an option of a linear model's fit"),
+        (str(ROOT / "models" / "rlc.bg"), ["--shooting", "single"],
+         "--shooting is an option of a nonlinear model's fit"),
+    ],
+)  # fmt: skip
+def test_options_of_the_other_kind_of_fit_are_refused(tmp_path, capsys, model, options, message):
+    t = np.arange(50) * 5.0
+    data = _write(tmp_path / "a.csv", t, np.full(t.size, 4.0), np.full(t.size, 2.56))
+    status, _, err = run_mtt(capsys, "fit", model, "--data", data, *options)
+    assert status == 2 and message in err
+
+
+def test_model_fit_of_a_nonlinear_model_starts_from_the_small_signal_estimate():
+    t, u, clean, _ = _record(3, high=10.0)  # below the rim: the small-signal model fits
+    model = mtt.load(MODEL)
+    found = model.fit(t, u, noisy(clean, 20, seed=3), hold="zoh", multistart=0)
+    assert found.ok and found.method == "pem", found.message
+    origin, start, reached = found.starts[0]
+    assert origin.startswith("the small-signal model at u = ")
+    np.testing.assert_allclose(reached, found.k)
+    assert np.all(np.abs(found.k - TRUE) < 3 * found.k_se)
+    text = found.summary()
+    assert "prediction error with the nonlinear model" in text
+    assert "record 1: initial state q_upper = " in text and f"a1 = {found.k[0]:.6g} ± " in text
+    with pytest.raises(mtt.MttError, match="C is an option of a linear model's fit"):
+        model.fit(t, u, clean, C="(1+s)^3")
