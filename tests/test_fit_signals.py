@@ -103,3 +103,26 @@ def test_the_command_line_reads_a_column_per_signal(capsys, tmp_path):
     assert abs(found["unknowns"]["jl"]["k"] - 10.0) < 4 * found["unknowns"]["jl"]["k_se"]
     assert main(["fit", LOAD, *both]) == 2  # the default columns are the signals' labels
     assert "t,Se:v,Se:tl,Df:speed,Df:current" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize(
+    "flag",
+    [
+        ["--validate", "held.csv"],
+        ["--plot", "fit.png"],
+        ["--csv", "fit.csv"],
+        ["--data-plot", "data.png"],
+        ["--method", "iv"],
+        ["--beta", "0.5"],
+        ["--seed", "3"],
+    ],
+)
+def test_the_command_line_refuses_what_it_does_not_do_with_several_signals(capsys, tmp_path, flag):
+    from mtt.cli.main import main
+
+    path = tmp_path / "rig.csv"
+    path.write_text("t,Se:v,Se:tl,Df:speed,Df:current\n0,0,0,0,0\n")
+    both = ["--input", "Se:v,Se:tl", "--output", "Df:speed,Df:current", "--data", str(path)]
+    assert main(["fit", LOAD, *both, *flag]) == 2
+    assert flag[0] in capsys.readouterr().err
+    assert not list(tmp_path.glob("*.png")) and not (tmp_path / "fit.csv").exists()

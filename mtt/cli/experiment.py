@@ -30,17 +30,22 @@ def hold_of(args) -> str:
     return default_hold(args.signal, measured=bool(getattr(args, "data", None)))
 
 
-def experiment_data(module: ModuleType, args, several: bool = False) -> list[Record]:
-    """Measured data (each --data), or a simulation of the model with the chosen input and
-    noise: one record unless `several` (fit) allows more."""
+def refuse_simulation(args) -> None:
+    """With --data there is nothing to simulate: a simulation option is an error, not ignored."""
     simulation = {"--signal": args.signal, "--t-end": args.t_end, "--dt": args.dt}
     simulation |= {"--true": args.true}
     simulation |= {"--noise-uniform": args.noise_uniform, "--noise-snr": args.noise_snr}
     simulation |= {"--seed": args.seed, "--amplitude": args.amplitude, "--period": args.period}
+    given = [flag for flag, value in simulation.items() if value is not None]
+    if given:
+        raise UsageError(f"--data and {given[0]} do not go together ({given[0]} simulates)")
+
+
+def experiment_data(module: ModuleType, args, several: bool = False) -> list[Record]:
+    """Measured data (each --data), or a simulation of the model with the chosen input and
+    noise: one record unless `several` (fit) allows more."""
     if getattr(args, "data", None):
-        given = [flag for flag, value in simulation.items() if value is not None]
-        if given:
-            raise UsageError(f"--data and {given[0]} do not go together ({given[0]} simulates)")
+        refuse_simulation(args)
         if len(args.data) > 1 and not several:
             raise UsageError(
                 f"{args.command} takes one --data ({len(args.data)} given); `mtt fit` combines "
