@@ -17,7 +17,7 @@ The system
     Known values substituted exactly: la = 1/10.
 
 What is assumed, and which answer is exact for what
-    The system is linear and single-input single-output. Its coefficients are the
+    The system is linear, with one input and one output. Its coefficients are the
     polynomials in ra, km, j, b printed in `theta` below: every other parameter is known.
     Between samples the input is interpolated linearly (a first-order hold of a
     piecewise-linear input) unless hold="zoh" says it was held from each sample to the next

@@ -18,7 +18,7 @@ The system
     Known values substituted exactly: ra = 2, la = 1/100, km = 1/2, b = 1/100, v0 = 1/100, m = 1/5, g = 981/100, l = 3/10.
 
 What is assumed, and which answer is exact for what
-    The system is linear and single-input single-output. Its coefficients are the
+    The system is linear, with one input and one output. Its coefficients are the
     polynomials in j, fc printed in `theta` below: every other parameter is known.
     Between samples the input is interpolated linearly (a first-order hold of a
     piecewise-linear input) unless hold="zoh" says it was held from each sample to the next
