@@ -1,0 +1,94 @@
+"""A fit pooled over records that workers hold: the generated module's `fit_records` runs
+in this process over `Pooled`, its Records protocol, whose every answer (moments,
+validation sums) is summed over chunks of records that the workers read once and keep. Each
+step of the fit is one round trip of small matrices; the steps themselves are the module's.
+"""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING
+
+from mtt.batch import run, worker
+from mtt.language.diagnostics import MttError
+
+if TYPE_CHECKING:
+    from mtt.batch.api import Estimator, Progress
+
+
+class _OptionsChecked(Exception):
+    pass
+
+
+class _NoRecords:
+    def shapes(self):
+        raise _OptionsChecked
+
+
+def check_options(module, options: dict) -> None:
+    """The module's own checks of fit's options, once, before any record is sent: fit_records
+    checks them before it asks the records anything."""
+    try:
+        module.fit_records(_NoRecords(), **options)
+    except _OptionsChecked:
+        return
+    except (TypeError, ValueError) as error:
+        raise MttError(str(error), kind="bad_argument") from None
+
+
+def _summed(method: str, parts: bool = False):
+    """A Records method of `Pooled`: the chunks' answers summed (parts: lists, joined)."""
+    return lambda self, *args: sum(self._ask(method, args), [] if parts else 0)
+
+
+class Pooled:
+    """The module's Records protocol over chunks of records that workers hold: each answer
+    is the sum of the chunks' answers in chunk order (the same chunks give the same sums
+    wherever they run). Made, it has read the records once: `errors` (position -> message)
+    are those that could not be read or are too short, left out of every later step."""
+
+    def __init__(self, found: Estimator, pool: run.Runner, chunks: list[run.Chunk], columns,
+                 progress: Progress | None, offset: bool, initial_state: bool):  # fmt: skip
+        self.found, self.pool, self.columns, self.progress = found, pool, tuple(columns), progress
+        self.source = pool.share(found.source) if isinstance(pool, run.Dask) else found.source
+        self.chunks = chunks
+        self.held = {  # each chunk's records read where they stay (None: read at each step)
+            chunk.number: pool.hold(worker.load, (found.name, self.source, chunk.items,
+                                                  self.columns, offset, initial_state))
+            for chunk in self.chunks
+        }  # fmt: skip
+        self.rounds = 0
+        self.errors: dict[int, str] = {}
+        self._shapes: list = []
+        for _, shapes, errors in self._ask("shapes", (offset, initial_state)):
+            self._shapes += shapes
+            self.errors.update(errors)
+        self.chunks = [
+            run.Chunk(chunk.number, [item for item in chunk.items if item[0] not in self.errors])
+            for chunk in self.chunks
+        ]
+        self.chunks = [chunk for chunk in self.chunks if chunk.items]
+
+    def _ask(self, method: str, args: tuple) -> list:
+        def call(chunk: run.Chunk):
+            held = None if chunk.suspect else self.held.get(chunk.number)
+            held = list(chunk.items) if held is None else held
+            return worker.pooled, (self.found.name, self.source, held, self.columns, method, args)
+
+        answers: dict[int, list] = {}
+        for chunk, answer in self.pool.results(
+            [run.Chunk(c.number, c.items) for c in self.chunks], call
+        ):
+            if isinstance(answer, run.Died):
+                raise MttError(f"{chunk.items[0][1]}: {answer}", kind="worker_died")
+            answers.setdefault(chunk.number, []).append(answer)
+        self.rounds += 1
+        if self.progress is not None:
+            self.progress(self.rounds, None)
+        return [answer for number in sorted(answers) for answer in answers[number]]
+
+    def shapes(self) -> list:
+        return self._shapes
+
+    moments, residual_sum, noise_sums = (_summed(name) for name in ("moments", "residual_sum",
+                                                                     "noise_sums"))  # fmt: skip
+    validate, prediction = (_summed(name, parts=True) for name in ("validate", "prediction"))
