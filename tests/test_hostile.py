@@ -1,6 +1,8 @@
 """Hostile and odd model text (issue 12, item 8): each class of input that once ended in an
 internal error or ran for seconds now ends in a located error of a documented kind, at
-once, or simply works. The time bounds are hang guards: each case takes milliseconds."""
+once, or simply works. The time bounds are hang guards in CPU seconds of this process
+(time.process_time: what else runs on the machine does not count, so a loaded machine does
+not fail them), each far above what the case takes."""
 
 from __future__ import annotations
 
@@ -16,7 +18,7 @@ from mtt.derivation.pipeline import transfer_for
 from mtt.language.diagnostics import ModelError, Position, Source
 from mtt.language.parse import MAX_LINE, MAX_STATEMENTS, parse
 
-HANG = 1.0  # seconds: every case here ends in a few milliseconds
+HANG = 1.0  # CPU seconds: every case here ends in a few milliseconds of CPU
 
 
 def model(argument: str, params: str = "unknown c = 1") -> str:
@@ -25,8 +27,8 @@ def model(argument: str, params: str = "unknown c = 1") -> str:
 
 
 def failure(text: str, tmp_path=None) -> tuple[ModelError, float]:
-    """The error the whole derivation of `text` raises, and how long it took."""
-    start = time.perf_counter()
+    """The error the whole derivation of `text` raises, and the CPU seconds it took."""
+    start = time.process_time()
     with pytest.raises(ModelError) as caught:
         if tmp_path is None:
             parse(Source("test.bg", text))
@@ -34,7 +36,7 @@ def failure(text: str, tmp_path=None) -> tuple[ModelError, float]:
             path = tmp_path / "test.bg"
             path.write_text(text)
             transfer_for(path)
-    return caught.value, time.perf_counter() - start
+    return caught.value, time.process_time() - start
 
 
 def only(problem: ModelError) -> tuple[str, int, int, str]:
@@ -73,13 +75,13 @@ def test_minus_signs_before_a_number_fold_exactly():
 @pytest.mark.parametrize("count", [100_000, 4000])
 def test_many_parentheses(count):
     text = "model m\nparam p = " + "(" * count + "1" + ")" * count + "\n"
-    start = time.perf_counter()
+    start = time.process_time()
     if count * 2 > MAX_LINE:
         problem, _ = failure(text)
         assert only(problem)[:2] == ("syntax", 2)
     else:  # parentheses make no node: this is just 1
         assert parse(Source("test.bg", text)).parameters[0].value.value == 1
-    assert time.perf_counter() - start < HANG
+    assert time.process_time() - start < HANG
 
 
 def test_a_sum_of_ten_thousand_terms():
@@ -217,9 +219,9 @@ def ladder(stages: int, conflict: bool = False) -> str:
 
 def test_a_junction_with_many_bonds(models):
     graph = models.build(junction(300))
-    start = time.perf_counter()
+    start = time.process_time()
     causal = assign(graph)
-    assert time.perf_counter() - start < HANG
+    assert time.process_time() - start < HANG
     assert len(causal.dependent) == 297 and causal.integral("m0")
 
 
@@ -227,10 +229,10 @@ def test_a_conflict_behind_a_long_chain_of_choices_is_found_at_once(models):
     # every C and R of the ladder is a free choice made before the bonds of the clash: plain
     # backtracking would try their 2^300 combinations (it gave up after 10000 trials, in 2 s)
     graph = models.build(ladder(150, conflict=True))
-    start = time.perf_counter()
+    start = time.process_time()
     with pytest.raises(ModelError) as caught:
         assign(graph)
-    assert time.perf_counter() - start < HANG
+    assert time.process_time() - start < HANG
     (problem,) = caught.value.errors
     assert problem.kind == "causal_conflict" and "1:ka" in problem.message
     assert problem.position.line > 600  # at one of the junctions of the clash
@@ -239,9 +241,9 @@ def test_a_conflict_behind_a_long_chain_of_choices_is_found_at_once(models):
 def test_causality_of_a_thousand_bonds(models):
     graph = models.build(ladder(250))
     assert len(graph.bonds) == 1002
-    start = time.perf_counter()
+    start = time.process_time()
     causal = assign(graph)
-    assert time.perf_counter() - start < HANG
+    assert time.process_time() - start < HANG
     assert causal.dependent == () and causal.loops == ()
 
 
@@ -276,9 +278,9 @@ def numeric(expression: sympy.Expr, point: dict) -> complex:
 def test_irrational_constants_meeting_the_unknown_and_a_symbol(tmp_path, argument):
     # these ended in "expected an expression convertible to a rational function" (exit 3)
     path = rc_file(tmp_path, argument)
-    start = time.perf_counter()
+    start = time.process_time()
     tf = transfer_for(path)
-    assert time.perf_counter() - start < 5 * HANG  # sympy's number fields take some time
+    assert time.process_time() - start < 5 * HANG  # sympy's number fields take some time
     G = tf.numerator / tf.denominator
     expected = oracle_tf(path)
     s, c, q = sympy.symbols("s c q")
@@ -330,9 +332,9 @@ def test_constants_without_exact_arithmetic_say_what_to_write(tmp_path, argument
     ],
 )
 def test_values_are_measured_with_the_parameters_put_in(models, params, argument, kind, column):
-    start = time.perf_counter()
+    start = time.process_time()
     problem = models.failure(model(argument, "unknown c = 1\n" + params))
-    assert time.perf_counter() - start < HANG
+    assert time.process_time() - start < HANG
     (error,) = problem.errors
     assert error.kind == kind and error.position.column == column
 
@@ -375,9 +377,9 @@ def test_a_model_of_more_than_five_thousand_bonds(models):
     text = "model m\nSe:v -> 1:j\n1:j -> Df:y\n" + "".join(
         f"1:j -> C:c{i}(1)\n" for i in range(6000)
     )
-    start = time.perf_counter()
+    start = time.process_time()
     problem = models.failure(text)
-    assert time.perf_counter() - start < 5 * HANG  # reading 5000 bonds takes some time
+    assert time.process_time() - start < 5 * HANG  # reading 5000 bonds takes some time
     (error,) = problem.errors
     assert (error.kind, error.position.line) == ("too_large", 5002)
 
@@ -396,10 +398,10 @@ def test_three_small_files_cannot_make_a_huge_model(tmp_path):
     for i in range(100):
         top += [f'subsystem m{i} = "mid.bg"', f"1:t -> m{i}.p"]
     (tmp_path / "top.bg").write_text("\n".join(top) + "\n")
-    start = time.perf_counter()
+    start = time.process_time()
     with pytest.raises(ModelError) as caught:
         transfer_for(tmp_path / "top.bg")
-    assert time.perf_counter() - start < 5 * HANG
+    assert time.process_time() - start < 5 * HANG
     (error,) = caught.value.errors
     assert error.kind == "too_large" and "more than 5000 bonds" in error.message
     assert error.file.endswith("mid.bg")  # at the statement of the leaf that passes the limit
@@ -416,18 +418,18 @@ def test_a_model_file_over_a_megabyte(tmp_path):
 def test_a_megabyte_of_comments_and_blank_lines_is_read_at_once():
     # each line went through lark: 200000 comment lines took 10 s
     text = model("2") + "# a comment\n" * 60_000 + "\n" * 100_000 + "  \t# indented\r\n" * 20_000
-    start = time.perf_counter()
+    start = time.process_time()
     parsed = parse(Source("test.bg", text))
-    assert time.perf_counter() - start < HANG
+    assert time.process_time() - start < HANG
     assert [p.name for p in parsed.parameters] == ["c"] and len(parsed.bonds) == 4
 
 
 def test_more_lines_of_statements_than_the_limit(models):
     # a file under a megabyte of short statements (80000 lines) took 25 s to 120 s
     text = model("2") + "".join(f"param p{i} = 1\n" for i in range(MAX_STATEMENTS + 100))
-    start = time.perf_counter()
+    start = time.process_time()
     problem = models.failure(text)
-    assert time.perf_counter() - start < 5 * HANG  # reading 10000 statements takes some time
+    assert time.process_time() - start < 5 * HANG  # 10000 statements: 1 s of CPU
     (error,) = problem.errors  # every line is a statement: the first one over the limit
     assert (error.kind, error.position.line) == ("too_large", MAX_STATEMENTS + 1)
     assert f"more than {MAX_STATEMENTS} lines of statements" in error.message
@@ -439,9 +441,9 @@ def test_many_errors_are_rendered_in_linear_time(models):
     text = model("2") + "".join(f"R:x{i}(1)\n" for i in range(5000))
     problem = models.failure(text)
     assert len(problem.errors) == 5000
-    start = time.perf_counter()
+    start = time.process_time()
     rendered = problem.render()
-    assert time.perf_counter() - start < HANG
+    assert time.process_time() - start < HANG
     assert rendered.count("error[unconnected_component]") == 5000
     assert rendered.endswith(" 5006 | R:x4999(1)\n      | ^")
 

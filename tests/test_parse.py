@@ -522,9 +522,9 @@ def test_names_that_look_like_python_are_plain_parameter_names(models):
     ],
 )
 def test_huge_numbers_are_rejected_quickly(expression, column):
-    start = time.perf_counter()
+    start = time.process_time()
     (problem,) = syntax_errors(f"model m\nparam p = {expression}\n")
-    assert time.perf_counter() - start < 1.0
+    assert time.process_time() - start < 1.0
     assert problem[:2] == (2, column)
     assert "range" in problem[2] or "digits" in problem[2]
 
