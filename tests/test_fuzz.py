@@ -44,8 +44,9 @@ def _check(files, scratch: Path) -> None:
     outcome = run(files, directory)
     assert not outcome.bugs, (files.model, outcome.bugs)
     assert not outcome.executed, files.model
-    # a hang raises `Hang` (after 4 x 2 s: a guard that a busy machine does not trip); the
-    # 2 s budget itself is measured by tests/fuzz_campaign.py, which reports slow models
+    # a hang raises `Hang` (after 4 x 2 s of processor time, which a busy machine does not
+    # stretch); the 2 s budget itself is measured by tests/fuzz_campaign.py, which reports
+    # slow models
 
 
 @budget(60)
