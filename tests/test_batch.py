@@ -7,6 +7,7 @@ list of records, pooled): the batch layer must give the same numbers, bitwise pe
 
 from __future__ import annotations
 
+import csv
 import os
 import warnings
 from concurrent.futures import ProcessPoolExecutor
@@ -39,10 +40,20 @@ def check_against_direct(batch, module, folder):
             assert abs(outcome.result.k - 10.0) < 0.5 and outcome.seconds > 0
 
 
-def test_records_in_this_process_and_in_a_pool_give_the_same_numbers(dc_drive, logs):
+def test_records_in_this_process_and_in_a_pool_give_the_same_numbers(dc_drive, logs, tmp_path):
     pattern = str(logs / "run_*.csv")
     here = fit_many(dc_drive, pattern, jobs=1, hold="zoh")
     check_against_direct(here, dc_drive, logs)
+    # printed and written as `mtt fit --data PATTERN` prints and writes it (mtt.present.batch)
+    lines = str(here).splitlines()
+    assert (
+        lines[0] == "dc_drive: 12 records, one fit each (exact prediction error, in this process)"
+    )
+    assert lines[-1] == "  11 of 12 records fitted; 1 failed" and "failed" in lines[2 + 7]
+    with open(here.to_csv(tmp_path / "records.csv"), newline="") as file:
+        rows = list(csv.DictReader(file))
+    assert [row["file"] for row in rows] == paths_of(logs)
+    assert float(rows[0]["k"]) == here[0].result.k and rows[7]["error"] == here[7].error
     pooled_processes = fit_many(dc_drive, pattern, jobs=2, chunk_size=2, hold="zoh")
     check_against_direct(pooled_processes, dc_drive, logs)
     assert [o.error for o in here.errors] == [o.error for o in pooled_processes.errors]
@@ -83,6 +94,8 @@ def test_pooled_fit_equals_fit_on_the_list(dc_drive, logs):
         assert getattr(here.pooled, name) == pytest.approx(getattr(whole, name), rel=1e-9)
     assert here.pooled.offsets == pytest.approx(whole.offsets, rel=1e-9, abs=1e-12)
     assert here.pooled.iterations == whole.iterations and here.pooled.fitted == ()
+    assert str(here).splitlines()[0] == "dc_drive: " + "; ".join(paths_of(logs))
+    assert f"{here.pooled.k:.6g}" in str(here)
     processes = fit_many(dc_drive, paths_of(logs), jobs=2, pooled=True, chunk_size=3, hold="zoh")
     assert same_numbers(processes.pooled, here.pooled)  # the same chunks: the same sums
 

@@ -14,7 +14,7 @@ import math
 import sys
 from collections.abc import Callable, Iterator, Mapping
 from concurrent.futures import Executor
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from types import ModuleType
 
@@ -69,6 +69,33 @@ class Batch:
     outcomes: tuple[Outcome, ...]
     pooled: object | None = None
     validation: tuple[Validation, ...] = ()  # pooled: the pooled fit on the held-out records
+    module: ModuleType | None = field(default=None, repr=False, compare=False)  # fit_many's
+
+    def table(self) -> str:
+        """fit_many's batch as `mtt fit` prints it: a row per record (estimates, standard
+        errors, fit %, warnings), or the pooled fit; also str(batch)."""
+        from mtt.present import batch as text
+
+        if self.module is None:
+            raise MttError("only fit_many's batches print as a table", kind="bad_argument")
+        if self.pooled is not None:
+            return text.pooled_text(self.module, self)
+        return text.table(self.module, self)
+
+    def __str__(self) -> str:
+        return self.table() if self.module is not None else repr(self)
+
+    def to_csv(self, path: str | Path) -> Path:
+        """Write fit_many's per-record table as `mtt fit --csv` does (one row per record:
+        k, k_se, ci_low, ci_high of each unknown, fit %, warnings, error); the path. A
+        record's file is never written over (`mtt.files.FileClash`)."""
+        from mtt.present.batch import table_csv
+
+        if self.module is None or self.pooled is not None:
+            raise MttError("to_csv writes fit_many's per-record fits", kind="bad_argument")
+        read = [o.name for o in self.outcomes if Path(o.name).is_file()]  # never over a record
+        files.write_atomic(path, table_csv(self.module, self), inputs=read)
+        return Path(path)
 
     def __iter__(self) -> Iterator[Outcome]:
         return iter(self.outcomes)
@@ -285,9 +312,11 @@ def fit_many(model, records, *, executor=None, jobs: int | None = None, pooled: 
     if pooled:
         batch = _pooled(found, records, executor, jobs, columns, chunk_size, progress,
                         fit_options)  # fmt: skip
-        return replace(batch, validation=validation.compared(batch.pooled, held_out))
+        return replace(batch, validation=validation.compared(batch.pooled, held_out),
+                       module=found.module)  # fmt: skip
     batch = _each(found, records, "fit", executor, jobs, columns, chunk_size, progress,
                   fit_options)  # fmt: skip
+    batch = replace(batch, module=found.module)
     if not held_out:
         return batch
     return replace(batch, outcomes=tuple(

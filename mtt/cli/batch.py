@@ -10,7 +10,6 @@ this process is the plain `mtt fit` (fitting.py).
 
 from __future__ import annotations
 
-import argparse
 import glob
 import json
 import sys
@@ -58,6 +57,7 @@ def cmd_fit_many(args, kind: str) -> int:
     from mtt.derivation import pipeline
     from mtt.estimator import codegen
     from mtt.language.diagnostics import MttError
+    from mtt.present import batch as table
 
     if args.plot or (args.csv and kind == "pooled"):
         flag = "--plot" if args.plot else "--csv"
@@ -85,18 +85,18 @@ def cmd_fit_many(args, kind: str) -> int:
     finally:
         if client is not None:
             client.close()
-    errors = [_named(outcome) for outcome in batch.errors]
+    errors = [table.named(outcome) for outcome in batch.errors]
     if kind == "pooled":
         return _pooled(module, args, batch, errors)
     for error in errors:  # one line each, naming the record
         say(f"mtt fit: error: {error}", stderr=True)
     _warnings(batch)
     if args.csv:
-        files.write_atomic(args.csv, _table_csv(module, batch))
+        files.write_atomic(args.csv, table.table_csv(module, batch))
     if args.json:
-        say(json.dumps({"ok": batch.ok, "records": [o.record() for o in batch]}))
+        say(json.dumps(table.record(module, batch)))
     else:
-        say(_table(module, args, batch))
+        say(table.table(module, batch, _where(args), args.method))
     return EXIT_OK if batch.ok else EXIT_STOPPED
 
 
@@ -126,18 +126,18 @@ def _bar(total: int, kind: str):
 
 
 def _warnings(batch) -> None:
-    lines = [
-        f"{o.name}: {text}" for o in batch if o.result is not None for text in o.result.warnings
-    ]
+    from mtt.present.batch import warning_lines
+
+    lines = warning_lines(batch)
     warn("fit", lines[:SHOWN_WARNINGS])
     if len(lines) > SHOWN_WARNINGS:
         warn("fit", [f"{len(lines) - SHOWN_WARNINGS} more warnings (--json or --csv lists them)"])
 
 
-def _named(outcome) -> str:
-    """A record's error message, starting with its name."""
-    named = outcome.error.startswith(outcome.name)
-    return outcome.error if named else f"{outcome.name}: {outcome.error}"
+def _where(args) -> str:
+    if args.scheduler:
+        return f"on {args.scheduler}"
+    return f"{args.jobs} processes" if (args.jobs or 1) > 1 else "in this process"
 
 
 def _place(outcome) -> tuple[str, int | None]:
@@ -147,7 +147,7 @@ def _place(outcome) -> tuple[str, int | None]:
 
 
 def _pooled(module, args, batch, errors: list[str]) -> int:
-    from mtt.present.fits import fit_text, validation_lines
+    from mtt.present import batch as table
 
     if errors:  # as in this process: a bad record is the error (named, also in --json)
         for error in errors[1:]:
@@ -161,80 +161,8 @@ def _pooled(module, args, batch, errors: list[str]) -> int:
     warn("fit", result.warnings)
     if args.validate and not batch.validation[0].comparison:
         warn("fit", [f"no validation: {result.message}"])
-    notes = [f"{outcome.name}" for outcome in batch]
     if args.json:
-        record = {"model": module.MODEL, "unknown": module.UNKNOWN, **module.fit_record(result)}
-        record["data"] = notes
-        if batch.validation:
-            record["validation"] = [v.record() for v in batch.validation]
-        say(json.dumps(record))
+        say(json.dumps(table.record(module, batch)))
     else:
-        lines = [fit_text(module, [argparse.Namespace(note=note) for note in notes], result)]
-        lines += validation_lines(
-            [(v.name, v.comparison) for v in batch.validation if v.comparison is not None]
-        )
-        say("\n".join(lines))
+        say(table.pooled_text(module, batch))
     return EXIT_OK if result.ok else EXIT_STOPPED
-
-
-def _cells(module, outcome) -> tuple[str, ...]:
-    """A record's row: its estimate and standard error (each unknown's), fit, warnings."""
-    import numpy as np
-
-    result, count = outcome.result, len(module.UNKNOWNS)
-    held_out = [
-        "" if v.comparison is None else f"{v.comparison.fit_percent:.4g}"
-        for v in outcome.validation
-    ]
-    if outcome.error is not None:
-        return (outcome.name, *[""] * (2 * count), "", *held_out, "",
-                "failed (the error is on stderr)")  # fmt: skip
-    pairs = zip(np.atleast_1d(result.k), np.atleast_1d(result.k_se), strict=True)
-    estimates = (cell for k, se in pairs for cell in (f"{k:.6g}", f"{se:.3g}"))
-    return (outcome.name, *estimates, f"{result.fit_percent:.4g}", *held_out,
-            str(len(result.warnings) or ""), "")  # fmt: skip
-
-
-def _table(module, args, batch) -> str:
-    from mtt.present import tables
-    from mtt.present.fits import METHOD_NAMES
-
-    where = (f"on {args.scheduler}" if args.scheduler else
-             f"{args.jobs} processes" if (args.jobs or 1) > 1 else "in this process")  # fmt: skip
-    method = METHOD_NAMES[args.method]
-    if len(module.UNKNOWNS) == 1:
-        estimates = (module.UNKNOWN, "k_se")
-    else:
-        estimates = tuple(part for name in module.UNKNOWNS for part in (name, f"{name} k_se"))
-    held_out = tuple(f"fit % on {v.name}" for v in (batch[0].validation if len(batch) else ()))
-    header = ("file", *estimates, "fit %", *held_out, "warnings", "")
-    fitted = len(batch) - len(batch.errors)
-    return "\n".join([
-        f"{module.MODEL}: {len(batch)} records, one fit each ({method}, {where})",
-        *tables.rows([header, *(_cells(module, outcome) for outcome in batch)]),
-        f"  {fitted} of {len(batch)} records fitted" + (f"; {len(batch.errors)} failed"
-                                                         if batch.errors else ""),
-    ])  # fmt: skip
-
-
-def _table_csv(module, batch) -> str:
-    """One row per record; several unknowns: k, k_se, ci_low and ci_high of each, named."""
-    import numpy as np
-
-    from mtt.present import tables
-
-    names = [""] if len(module.UNKNOWNS) == 1 else [f"_{name}" for name in module.UNKNOWNS]
-    estimates = [f"{part}{name}" for name in names for part in ("k", "k_se", "ci_low", "ci_high")]
-    header = ["file", *estimates, "fit_percent", "residual_rms", "iterations", "warnings", "error"]
-    rows = []
-    for outcome in batch:
-        result = None if outcome.error else outcome.result
-        numbers = ("",) * (len(estimates) + 3)
-        if result is not None:
-            columns = zip(np.atleast_1d(result.k), np.atleast_1d(result.k_se),
-                          np.reshape(result.ci, (-1, 2)), strict=True)  # fmt: skip
-            numbers = (*(v for k, se, (lo, hi) in columns for v in (k, se, lo, hi)),
-                       result.fit_percent, result.residual_rms, result.iterations)  # fmt: skip
-        warnings = " | ".join(outcome.result.warnings) if outcome.result is not None else ""
-        rows.append((outcome.name, *numbers, warnings, outcome.error or ""))
-    return tables.csv_text(header, rows)

@@ -1,0 +1,105 @@
+"""A batch of fits (mtt.batch) as text: `mtt fit --data 'logs/*.csv'`'s table, one row per
+record, its CSV, and each failed record's message; `Batch.table()` and `Batch.to_csv()` of
+the API print the same."""
+
+from __future__ import annotations
+
+from types import ModuleType, SimpleNamespace
+
+import numpy as np
+
+from mtt.present import tables
+from mtt.present.fits import METHOD_NAMES, fit_text, validation_lines
+
+
+def named(outcome) -> str:
+    """A record's error message, starting with its name."""
+    named = outcome.error.startswith(outcome.name)
+    return outcome.error if named else f"{outcome.name}: {outcome.error}"
+
+
+def warning_lines(batch) -> list[str]:
+    """Each record's warnings, the record named."""
+    return [
+        f"{o.name}: {text}" for o in batch if o.result is not None for text in o.result.warnings
+    ]
+
+
+def _cells(module: ModuleType, outcome) -> tuple[str, ...]:
+    """A record's row: its estimate and standard error (each unknown's), fit, warnings."""
+    result, count = outcome.result, len(module.UNKNOWNS)
+    held_out = [
+        "" if v.comparison is None else f"{v.comparison.fit_percent:.4g}"
+        for v in outcome.validation
+    ]
+    if outcome.error is not None:
+        return (outcome.name, *[""] * (2 * count), "", *held_out, "",
+                "failed (the error is on stderr)")  # fmt: skip
+    pairs = zip(np.atleast_1d(result.k), np.atleast_1d(result.k_se), strict=True)
+    estimates = (cell for k, se in pairs for cell in (f"{k:.6g}", f"{se:.3g}"))
+    return (outcome.name, *estimates, f"{result.fit_percent:.4g}", *held_out,
+            str(len(result.warnings) or ""), "")  # fmt: skip
+
+
+def table(
+    module: ModuleType, batch, where: str = "in this process", method: str | None = None
+) -> str:
+    """One row per record: each unknown's estimate and standard error, the fit % (and on
+    each held-out record), the count of warnings; a failed record says so (its error is
+    printed apart: `named`). `method`: the fits' (by default read from their results)."""
+    methods = {getattr(o.result, "method", None) for o in batch if o.result is not None}
+    methods = sorted(methods - {None}) if method is None else [method]
+    method = ", ".join(METHOD_NAMES.get(m, str(m)) for m in methods)
+    if len(module.UNKNOWNS) == 1:
+        estimates = (module.UNKNOWN, "k_se")
+    else:
+        estimates = tuple(part for name in module.UNKNOWNS for part in (name, f"{name} k_se"))
+    held_out = tuple(f"fit % on {v.name}" for v in (batch[0].validation if len(batch) else ()))
+    header = ("file", *estimates, "fit %", *held_out, "warnings", "")
+    fitted = len(batch) - len(batch.errors)
+    failed = f"; {len(batch.errors)} failed" if batch.errors else ""
+    return "\n".join([
+        f"{module.MODEL}: {len(batch)} records, one fit each ({method or 'none fitted'}, "
+        f"{where})",
+        *tables.rows([header, *(_cells(module, outcome) for outcome in batch)]),
+        f"  {fitted} of {len(batch)} records fitted{failed}",
+    ])  # fmt: skip
+
+
+def table_csv(module: ModuleType, batch) -> str:
+    """One row per record; several unknowns: k, k_se, ci_low and ci_high of each, named."""
+    names = [""] if len(module.UNKNOWNS) == 1 else [f"_{name}" for name in module.UNKNOWNS]
+    estimates = [f"{part}{name}" for name in names for part in ("k", "k_se", "ci_low", "ci_high")]
+    header = ["file", *estimates, "fit_percent", "residual_rms", "iterations", "warnings", "error"]
+    rows = []
+    for outcome in batch:
+        result = None if outcome.error else outcome.result
+        numbers = ("",) * (len(estimates) + 3)
+        if result is not None:
+            columns = zip(np.atleast_1d(result.k), np.atleast_1d(result.k_se),
+                          np.reshape(result.ci, (-1, 2)), strict=True)  # fmt: skip
+            numbers = (*(v for k, se, (lo, hi) in columns for v in (k, se, lo, hi)),
+                       result.fit_percent, result.residual_rms, result.iterations)  # fmt: skip
+        warnings = " | ".join(outcome.result.warnings) if outcome.result is not None else ""
+        rows.append((outcome.name, *numbers, warnings, outcome.error or ""))
+    return tables.csv_text(header, rows)
+
+
+def pooled_text(module: ModuleType, batch) -> str:
+    """A pooled fit's text, as `mtt fit` prints it, the records named (and its comparison
+    with each held-out record)."""
+    notes = [SimpleNamespace(note=outcome.name) for outcome in batch]
+    compared = [(v.name, v.comparison) for v in batch.validation if v.comparison is not None]
+    return "\n".join([fit_text(module, notes, batch.pooled), *validation_lines(compared)])
+
+
+def record(module: ModuleType, batch) -> dict:
+    """`mtt fit --json` of a batch: {"ok", "records": [one per record]}, or pooled the fit's
+    record with its records' names under "data" (and "validation")."""
+    if batch.pooled is None:
+        return {"ok": batch.ok, "records": [outcome.record() for outcome in batch]}
+    found = {"model": module.MODEL, "unknown": module.UNKNOWN, **module.fit_record(batch.pooled)}
+    found["data"] = [outcome.name for outcome in batch]
+    if batch.validation:
+        found["validation"] = [v.record() for v in batch.validation]
+    return found
