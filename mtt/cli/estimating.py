@@ -13,12 +13,11 @@ import json
 import sys
 from types import ModuleType
 
-import numpy as np
 from tqdm import tqdm
 
 from mtt import files
 from mtt.cli import unknowns
-from mtt.cli.experiment import experiment_data, hold_of, module_for, signal_label
+from mtt.cli.experiment import experiment_data, hold_of, module_for
 from mtt.cli.running import EXIT_OK, EXIT_STOPPED, UsageError, say, warn
 from mtt.data.records import Record
 from mtt.present import estimates, values
@@ -40,16 +39,13 @@ def _filters(module: ModuleType, args) -> list[tuple[str, object]]:
     return filters or [(f"(1 + s)^{power}", None)]
 
 
-def run_all(module: ModuleType, data: Record, args) -> list[Run]:
-    """One estimate per filter and starting value, with a progress bar on a terminal."""
+def _runs(module: ModuleType, data: Record, args) -> list[Run]:
+    """mtt.api.runs.run_all with the options given, and a progress bar on a terminal."""
+    from mtt.api.runs import run_all
+
     filters = _filters(module, args)
-    options = dict(beta=args.beta, S0=args.S0, hold=hold_of(args), engine=args.engine,
-                   bounds=unknowns.bounds(module, args.bounds), rtol=args.rtol,
-                   atol=args.atol)  # fmt: skip
     starts = [unknowns.point(module, k0, "--k0") for k0 in args.k0]
     span = float(data.t[-1] - data.t[0])
-    runs = []
-    fits: dict[bytes, object] = {}  # the least-squares fit per filter: runs from each k0 share it
     with tqdm(
         total=span * len(filters) * len(starts),
         desc="estimating",
@@ -59,32 +55,12 @@ def run_all(module: ModuleType, data: Record, args) -> list[Run]:
         disable=not sys.stderr.isatty(),
         bar_format="{l_bar}{bar}| {n:.3g}/{total:.3g} s of data [{elapsed}<{remaining}]",
     ) as bar:
-        for label, C in filters:
-            for k0 in starts:
-                start = bar.n
-                if args.S0_relative is not None:
-                    options["S0"] = module.prior_weight(
-                        data.t, data.u, data.y, k0=k0, fraction=args.S0_relative, C=C,
-                        hold=hold_of(args),
-                    )  # fmt: skip
-                result = module.estimate(
-                    data.t, data.u, data.y, k0=k0, C=C, **options,
-                    progress=lambda now, start=start: bar.update(start + now - data.t[0] - bar.n),
-                )  # fmt: skip
-                bar.update(start + span - bar.n)
-                runs.append(Run(k0, label, result, *_least_squares(module, data, result, args,
-                                                                    fits)))  # fmt: skip
-    return runs
-
-
-def _cost_range(runs: list[Run], data: Record, given: list[float] | None) -> tuple[float, float]:
-    if given is not None:
-        return given[0], given[1]
-    points = [run.k0 for run in runs] + [value for run in runs for value in run.result.minima()]
-    points += [] if data.k is None else [data.k]
-    low, high = min(points), max(points)
-    margin = max(0.25 * (high - low), 0.5)
-    return low - margin, high + margin
+        return run_all(
+            module, data, filters, starts, S0_relative=args.S0_relative,
+            progress=lambda done: bar.update(done - bar.n), beta=args.beta, S0=args.S0,
+            hold=hold_of(args), engine=args.engine, bounds=unknowns.bounds(module, args.bounds),
+            rtol=args.rtol, atol=args.atol,
+        )  # fmt: skip
 
 
 def cmd_estimate(args) -> int:
@@ -101,12 +77,12 @@ def cmd_estimate(args) -> int:
             f"({', '.join(module.UNKNOWNS)}) it is a surface: see the table's minima"
         )
     (data,) = experiment_data(module, args)
-    runs = run_all(module, data, args)
+    runs = _runs(module, data, args)
     labels = estimates.labels(module, runs)
     curves = [
         plots.Curve(label, run.result.t, run.result.khat, estimates.minima(module, run.result),
                     None if several else run.result.normalised_cost, run.result.global_k,
-                    _band(module, run) if args.plot and len(runs) == 1 else None)
+                    estimates.band(module, run) if args.plot and len(runs) == 1 else None)
         for label, run in zip(labels, runs, strict=True)
     ]  # fmt: skip
     title = f"{module.MODEL}: {data.note}"
@@ -117,8 +93,8 @@ def cmd_estimate(args) -> int:
     if args.data_plot:
         plots.data(
             args.data_plot, data.t, data.u, data.y, clean=data.clean, title=title,
-            input_label=signal_label(module, "input"),
-            output_label=signal_label(module, "output"), dpi=args.dpi,
+            input_label=plots.signal_label(module, "input"),
+            output_label=plots.signal_label(module, "output"), dpi=args.dpi,
         )  # fmt: skip
     if args.plot:
         names = ", ".join(module.UNKNOWNS)
@@ -128,7 +104,7 @@ def cmd_estimate(args) -> int:
         )  # fmt: skip
     if args.cost_plot:
         plots.cost(
-            args.cost_plot, curves, k_range=_cost_range(runs, data, args.cost_range),
+            args.cost_plot, curves, k_range=estimates.cost_range(runs, data.k, args.cost_range),
             unknown=module.UNKNOWN, true_value=data.k,
             title=f"{module.MODEL}: normalised cost at t = {data.t[-1]:g}", dpi=args.dpi,
         )  # fmt: skip
@@ -146,34 +122,3 @@ def cmd_estimate(args) -> int:
     else:
         say(estimates.table(module, data.note, float(data.t[-1]), runs))
     return EXIT_OK if all(run.result.ok for run in runs) else EXIT_STOPPED
-
-
-def _least_squares(module: ModuleType, data: Record, result, args, fits: dict) -> tuple:
-    """(k_se, k_ls): the final estimate's standard error (a vector for several unknowns),
-    that of the least-squares fit of the same cost J over the record, with the same filter
-    and forgetting (its sandwich variance, which counts the colour of the equation error),
-    and that fit's minimiser, where the estimate would be without the prior S0. (None, None)
-    when the run stopped, ended at a local minimum that is not the global one (whose basin
-    the fit's figures do not describe), or the data do not determine k. `fits` keeps the
-    fit of each filter (C="auto" may choose another for another k0)."""
-    if not (result.ok and result.at_global):  # stopped, or in another minimum's basin
-        return None, None
-    key = np.asarray(result.filter, dtype=float).tobytes()
-    if key not in fits:
-        fits[key] = module.fit(data.t, data.u, data.y, method="ls", C=result.filter,
-                               beta=args.beta, hold=hold_of(args), offset=False,
-                               initial_state=False)  # fmt: skip
-    final = fits[key]  # (its ok also weighs the exact output error, not J's own figures)
-    if not (np.all(np.isfinite(final.k)) and np.all(np.isfinite(final.k_se))):
-        return None, None
-    return final.k_se, final.k
-
-
-def _band(module: ModuleType, run: Run) -> np.ndarray | None:
-    """Half-width of an approximate 95 % band about k^(t) (drawn for a single run: several
-    would hide one another; one unknown): the final standard error scaled by the
-    information gathered, 1/sqrt(J_2)."""
-    if run.k_se is None or len(module.UNKNOWNS) > 1:
-        return None
-    J2 = run.result.J[0]
-    return 1.96 * run.k_se * np.sqrt(J2[-1] / J2)

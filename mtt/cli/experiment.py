@@ -111,21 +111,6 @@ def several_records(module: ModuleType) -> str:
     )
 
 
-def signal_label(module: ModuleType, role: str) -> str:
-    """What a plot calls the input or the output: the model's words for the source or
-    detector, else what it is (the effort or flow of the component), with its label."""
-    label = getattr(module, role.upper())
-    description = getattr(module, f"{role.upper()}_DESCRIPTION", None)
-    if description:
-        return f"{description} ({label})"
-    kind, _, name = label.partition(":")
-    if not name:  # a simulator names its signals by their symbols (u, y)
-        return f"{role} ({label})"
-    quantity = "effort" if kind in ("Se", "De") else "flow"
-    where = "of the source" if role == "input" else "at the detector"
-    return f"{role}: {quantity} {where} {name} ({label})"
-
-
 def _nonlinear(args):
     """(graph, choice) of a nonlinear model given no operating point (whose module is
     its simulator, not an estimator), else None."""
@@ -198,8 +183,8 @@ def cmd_simulate(args) -> int:
     if args.data_plot:
         plots.data(
             args.data_plot, data.t, data.u, data.y, clean=data.clean,
-            title=f"{module.MODEL}: {data.note}", input_label=signal_label(module, "input"),
-            output_label=signal_label(module, "output"), dpi=args.dpi,
+            title=f"{module.MODEL}: {data.note}", input_label=plots.signal_label(module, "input"),
+            output_label=plots.signal_label(module, "output"), dpi=args.dpi,
         )  # fmt: skip
     if args.csv:
         files.write_atomic(

@@ -16,7 +16,7 @@ import numpy as np
 from mtt import files
 from mtt.api import nonlinear_fits
 from mtt.api.model import Model
-from mtt.cli.experiment import checked_module, experiment_data, module_for, signal_label
+from mtt.cli.experiment import checked_module, experiment_data, module_for
 from mtt.cli.fit_options import nonlinear_options, options
 from mtt.cli.options import choice_from_args
 from mtt.cli.running import EXIT_OK, EXIT_STOPPED, UsageError, say, warn
@@ -73,7 +73,7 @@ def cmd_fit(args) -> int:
             for data, c in zip(held_out, compared, strict=False)
         ]
         plots.fit(
-            args.plot, shown, output_label=signal_label(module, "output"), dpi=args.dpi,
+            args.plot, shown, output_label=plots.signal_label(module, "output"), dpi=args.dpi,
             title=f"{module.MODEL}: {fits.estimates(module, result)}, "
             f"fit {result.fit_percent:.4g} %"
             + ("" if result.noise is None else f"; noise {fits.noise_text(result.noise)}")

@@ -191,3 +191,25 @@ def trajectories_csv(module: ModuleType, runs: list[Run]) -> str:
             for t, khat in zip(run.result.t, run.result.khat, strict=True)
         )
     return tables.csv_text(header, rows)
+
+
+def cost_range(runs: list[Run], k, given: list[float] | None) -> tuple[float, float]:
+    """The range of k the cost figure shows: `given`, else the starts, the minima and the
+    true value `k` (None: not known) with a margin."""
+    if given is not None:
+        return given[0], given[1]
+    points = [run.k0 for run in runs] + [value for run in runs for value in run.result.minima()]
+    points += [] if k is None else [k]
+    low, high = min(points), max(points)
+    margin = max(0.25 * (high - low), 0.5)
+    return low - margin, high + margin
+
+
+def band(module: ModuleType, run: Run) -> np.ndarray | None:
+    """Half-width of an approximate 95 % band about k^(t) (drawn for a single run: several
+    would hide one another; one unknown): the final standard error scaled by the
+    information gathered, 1/sqrt(J_2)."""
+    if run.k_se is None or len(module.UNKNOWNS) > 1:
+        return None
+    J2 = run.result.J[0]
+    return 1.96 * run.k_se * np.sqrt(J2[-1] / J2)

@@ -11,12 +11,28 @@ import textwrap
 from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
+from types import ModuleType
 
 import numpy as np
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 
 from mtt.files import write_atomic
+
+
+def signal_label(module: ModuleType, role: str) -> str:
+    """What a plot calls the input or the output: the model's words for the source or
+    detector, else what it is (the effort or flow of the component), with its label."""
+    label = getattr(module, role.upper())
+    description = getattr(module, f"{role.upper()}_DESCRIPTION", None)
+    if description:
+        return f"{description} ({label})"
+    kind, _, name = label.partition(":")
+    if not name:  # a simulator names its signals by their symbols (u, y)
+        return f"{role} ({label})"
+    quantity = "effort" if kind in ("Se", "De") else "flow"
+    where = "of the source" if role == "input" else "at the detector"
+    return f"{role}: {quantity} {where} {name} ({label})"
 
 
 def _hat(name: str) -> str:
