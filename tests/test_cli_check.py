@@ -265,7 +265,7 @@ def test_show_unknown_option_and_model_errors(capsys):
     several = str(DATA / "valid" / "several_unknowns.bg")
     assert main(["show", several]) == 0
     assert capsys.readouterr().out.splitlines()[-1] == "unknown a, b, c"
-    assert main(["show", "--unknown", "b", several]) == 0
+    assert main(["show", several, "--unknown", "b"]) == 0
     assert capsys.readouterr().out.splitlines()[-1] == "unknown b"
 
 
@@ -273,11 +273,11 @@ def test_check_unknown_option(capsys):
     several = str(DATA / "valid" / "several_unknowns.bg")
     assert main(["check", several]) == 0
     assert capsys.readouterr().out.strip().endswith(", unknowns a, b, c")
-    assert main(["check", "--unknown", "c", several]) == 0
+    assert main(["check", several, "--unknown", "c"]) == 0
     assert capsys.readouterr().out.strip().endswith(", unknown c")
-    assert main(["check", "--json", "--unknown", "c", several]) == 0
+    assert main(["check", "--json", several, "--unknown", "c"]) == 0
     assert json.loads(capsys.readouterr().out)["unknown"] == ["c"]
-    assert main(["check", "--json", "--unknown", "nope", several]) == 2
+    assert main(["check", "--json", several, "--unknown", "nope"]) == 2
     record = json.loads(capsys.readouterr().out)
     assert [(e["kind"], e["line"]) for e in record["errors"]] == [("undeclared_parameter", None)]
 

@@ -100,3 +100,26 @@ def test_lists_take_commas_and_spaces_alike(capsys):
     # a space inside one point of several unknowns: the message says how to write it
     with pytest.raises(MttError, match=r"joined by commas: --k0 ra=\.\.\.,jl=\.\.\.; a space"):
         in_unknowns_order({"ra": 1.0}, ("ra", "jl"), "--k0")
+
+
+def test_names_take_commas_and_spaces_alike(capsys):
+    """--unknown, --keep, --at and --columns read lists as --k0 does; --set a word each
+    (a value may hold commas); a model file the list took is said to be one."""
+    from mtt.cli.main import make_parser
+
+    parse = make_parser().parse_args
+    for names in (["tau,l"], ["tau", "l"], ["tau,", "l"]):
+        args = parse(["tf", "m.bg", "--keep", *names, "--unknown", *names])
+        assert args.keep == args.unknowns == ["tau", "l"]
+        assert parse(["fit", "m.bg", "--columns", *names, "x"]).columns == ["tau", "l", "x"]
+    args = parse(["tf", "m.bg", "--set", "r=3", "l=max(1, 2)", "--at", "u=1", "q=1/2,p=0"])
+    assert [name for name, _ in args.overrides] == ["r", "l"] and str(args.overrides[1][1]) == "2"
+    assert [name for name, _ in args.at] == ["u", "q", "p"]
+    for option in ("--keep", "--unknown", "--columns"):
+        with pytest.raises(SystemExit):
+            parse(["fit", option, "tau", "l", "models/absorber.bg"])
+        err = capsys.readouterr().err
+        assert f"argument {option}: 'models/absorber.bg' is a model file, not an item" in err
+        assert "put the model file before the option, or end the list with --" in err
+    args = parse(["tf", "--keep", "tau", "l", "--", "models/absorber.bg"])
+    assert (args.keep, args.file) == (["tau", "l"], "models/absorber.bg")

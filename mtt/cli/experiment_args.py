@@ -18,6 +18,7 @@ from mtt.cli.options import (
     named_values,
     numbers,
     starts,
+    words,
 )
 from mtt.data import DEFAULT_DT, DEFAULT_SEED, DEFAULT_T_END
 
@@ -50,8 +51,12 @@ def _data_options(parser: argparse.ArgumentParser, measured: bool) -> None:
         )
         group.add_argument(
             "--columns",
-            metavar="T,U,Y",
-            help="the names of the CSV columns of time, input and output (default t,u,y)",
+            metavar="NAME",
+            type=words,
+            nargs="+",
+            action=Flatten,
+            help="the names of the CSV columns of time, input and output (default t,u,y): "
+            "--columns time,v,w or --columns time v w",
         )
     group.add_argument(
         "--signal",

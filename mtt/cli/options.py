@@ -61,7 +61,7 @@ def _point(text: str) -> list[tuple[str, object]]:
     """`--at u=3.2,q_t=1/2`: values of the input and of states, exact; `x=V1;V2...` the
     states in order."""
     values = []
-    for part in (p for p in text.split(",") if p.strip()):
+    for part in words(text):
         name, equals, value = part.partition("=")
         if name.strip() == "x" and equals:
             values.append(("x", tuple(assignment(f"x={v}")[1] for v in value.split(";"))))
@@ -83,8 +83,28 @@ def _components(text: str) -> str:
     return text
 
 
-def _names(text: str) -> list[str]:
-    return [name.strip() for name in text.split(",") if name.strip()]
+def words(text: str) -> list[str]:
+    """A list option's word: items separated by commas (`a,b`); the option (nargs="+",
+    action `Flatten`) extends its list with them, so that `a,b c` and `a b c` say the same,
+    as for every list of mtt's options. A model file is not an item: the list took it from
+    the command's FILE, which goes before the option (or after `--`)."""
+    items = [item.strip() for item in text.split(",") if item.strip()]
+    if not items:
+        raise argparse.ArgumentTypeError(f"expected items separated by commas, not {text!r}")
+    for item in items:
+        if item.endswith(".bg"):
+            raise argparse.ArgumentTypeError(
+                f"{item!r} is a model file, not an item of the list: put the model file "
+                "before the option, or end the list with --"
+            )
+    return items
+
+
+def _assignments(text: str) -> list[tuple[str, sympy.Expr]]:
+    """--set's word (NAME=VALUE, one a word: a value may hold commas, as max(a, b))."""
+    if text.endswith(".bg") and "=" not in text:
+        words(text)  # the model file's message
+    return [assignment(text)]
 
 
 def add_selection_options(parser: argparse.ArgumentParser) -> None:
@@ -92,12 +112,13 @@ def add_selection_options(parser: argparse.ArgumentParser) -> None:
     group = parser.add_argument_group("model")
     group.add_argument(
         "--unknown",
-        metavar="A,B",
-        type=_names,
-        action="extend",
+        metavar="NAME",
+        type=words,
+        nargs="+",
+        action=Flatten,
         dest="unknowns",
         help="the parameters to identify, in this order (default: those the model declares "
-        "'unknown')",
+        "'unknown'): --unknown a,b or --unknown a b",
     )
     for role, what, example in (
         ("input", "source", "Se:v, or a subsystem's Se:motor.v"),
@@ -154,21 +175,25 @@ def add_parameter_options(parser: argparse.ArgumentParser) -> None:
     group = parser.add_argument_group("parameters")
     group.add_argument(
         "--keep",
-        metavar="A,B",
-        type=_names,
-        action="extend",
+        metavar="NAME",
+        type=words,
+        nargs="+",
+        action=Flatten,
         default=[],
-        help="keep these parameters symbolic instead of substituting their values",
+        help="keep these parameters symbolic instead of substituting their values: --keep "
+        "a,b or --keep a b",
     )
     group.add_argument("--symbolic", action="store_true", help="keep every parameter symbolic")
     group.add_argument(
         "--set",
         metavar="NAME=VALUE",
-        type=assignment,
-        action="append",
+        type=_assignments,
+        nargs="+",
+        action=Flatten,
         default=[],
         dest="overrides",
-        help="override a parameter's value (an exact expression, e.g. --set ra=1.5)",
+        help="override parameters' values (exact expressions, e.g. --set ra=1.5 or --set "
+        "ra=1.5 jl=2: a word each, as a value may hold commas)",
     )
     group.add_argument(
         "--max-terms",
@@ -181,9 +206,10 @@ def add_parameter_options(parser: argparse.ArgumentParser) -> None:
     group = parser.add_argument_group("operating point (nonlinear models)")
     group.add_argument(
         "--at",
-        metavar="NAME=VALUE,...",
+        metavar="NAME=VALUE",
         type=_point,
-        action="extend",
+        nargs="+",
+        action=Flatten,
         help="linearise about this point: the input u and/or states by name (q_tank=0.5), "
         "or x=V1;V2;... for all states in order; what is not given is the steady state "
         "(see mtt equilibrium)",

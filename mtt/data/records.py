@@ -51,7 +51,8 @@ def columns(given: str | Sequence[str] | None) -> tuple[str, str, str]:
     parts = given.split(",") if isinstance(given, str) else list(given)
     names = tuple(str(name).strip() for name in parts)
     if len(names) != 3 or not all(names) or len(set(names)) != 3:
-        raise DataError(f"columns takes three different names T,U,Y, not {given!r}", "columns")
+        shown = given if isinstance(given, str) else ",".join(map(str, given))
+        raise DataError(f"columns takes three different names T,U,Y, not {shown!r}", "columns")
     return names
 
 
