@@ -334,7 +334,7 @@ def run(files: Files, directory: Path, commands=COMMANDS) -> Outcome:
                 status = main(argv)
             statuses.append(status)
             if command == ["check", "--json"] and out.getvalue().strip():
-                record = json.loads(out.getvalue().splitlines()[0])
+                (record,) = json.loads(out.getvalue().splitlines()[0])["files"]
                 kinds = tuple(sorted({e["kind"] for e in record["errors"]}))
             if status not in (0, 2):
                 bugs.append(f"mtt {' '.join(command)}: {err.getvalue()}")

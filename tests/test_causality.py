@@ -388,7 +388,7 @@ def test_the_deriving_commands_report_what_they_cannot_do(capsys):
     assert main(["theta", str(STRUCTURE / "dropped.bg")]) == 2
     assert "dropped.bg:6:9: error[no_dependence]: the unknown k" in capsys.readouterr().err
     assert main(["check", "--json", str(STRUCTURE / "dropped.bg")]) == 2
-    record = json.loads(capsys.readouterr().out)
+    (record,) = json.loads(capsys.readouterr().out)["files"]
     assert [(e["kind"], e["line"]) for e in record["errors"]] == [("no_dependence", 6)]
     assert (record["input"], record["output"]) == ("Se:v", "De:y")
 

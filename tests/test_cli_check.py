@@ -276,9 +276,9 @@ def test_check_unknown_option(capsys):
     assert main(["check", several, "--unknown", "c"]) == 0
     assert capsys.readouterr().out.strip().endswith(", unknown c")
     assert main(["check", "--json", several, "--unknown", "c"]) == 0
-    assert json.loads(capsys.readouterr().out)["unknown"] == ["c"]
+    assert json.loads(capsys.readouterr().out)["files"][0]["unknown"] == ["c"]
     assert main(["check", "--json", several, "--unknown", "nope"]) == 2
-    record = json.loads(capsys.readouterr().out)
+    (record,) = json.loads(capsys.readouterr().out)["files"]
     assert [(e["kind"], e["line"]) for e in record["errors"]] == [("undeclared_parameter", None)]
 
 
@@ -303,7 +303,9 @@ def test_check_text_output_renders_source_and_caret(capsys):
 
 def test_check_json_warnings_are_listed(capsys):
     assert main(["check", "--json", str(DATA / "valid" / "active_elements.bg")]) == 0
-    record = json.loads(capsys.readouterr().out)
+    document = json.loads(capsys.readouterr().out)  # one file: the same shape as several
+    assert set(document) == {"ok", "files"} and document["ok"] is True
+    (record,) = document["files"]
     assert_record_shape(record)
     assert record["ok"] is True
     assert [(w["kind"], w["line"], w["column"]) for w in record["warnings"]] == [

@@ -278,7 +278,7 @@ def test_mtt_check_and_draw_take_a_part_alone_and_derivation_does_not(tmp_path, 
     out = capsys.readouterr().out
     assert "ok: part absorber_stage, 11 components, 10 bonds, ports liquid_in, gas_in" in out
     assert main(["check", "--json", part]) == 0
-    record = json.loads(capsys.readouterr().out)
+    (record,) = json.loads(capsys.readouterr().out)["files"]
     assert record["ok"] and record["input"] is None and record["ports"][-1] == "gas_out"
     assert main(["draw", part, "-o", str(tmp_path / "stage.svg")]) == 0
     assert "bond graph of part absorber_stage (ports liquid_in" in capsys.readouterr().out

@@ -255,11 +255,11 @@ def test_check_identifiability_warns_about_unknowns_not_globally_identifiable(ca
         "   |         ^",
     ]
     _, out, _ = run(capsys, "check", "--json", "--identifiability", CASES / "series_resistors.bg")
-    (warning,) = json.loads(out)["warnings"]
+    (warning,) = json.loads(out)["files"][0]["warnings"]
     assert (warning["kind"], warning["line"], warning["column"]) == ("not_identifiable", 5, 9)
     _, out, _ = run(capsys, "check", "--json", "--identifiability",
                     CASES / "series_resistors.bg", "--unknown", "r1")  # fmt: skip
-    assert json.loads(out)["warnings"] == []
+    assert json.loads(out)["files"][0]["warnings"] == []
 
 
 def test_compile_warns_about_an_unknown_that_is_only_locally_identifiable(capsys, tmp_path):

@@ -51,7 +51,7 @@ def test_an_error_two_levels_down_is_placed_in_its_file(
     for name, text in files.items():
         (tmp_path / name).write_text(text, encoding="utf-8")
     assert main(["check", "--json", str(tmp_path / "top.bg"), *options]) == 2
-    (error,) = json.loads(capsys.readouterr().out)["errors"]
+    (error,) = json.loads(capsys.readouterr().out)["files"][0]["errors"]
     prefix = str(tmp_path) + os.sep
     assert (error["file"], error["kind"], error["line"], error["column"]) == (
         str(tmp_path / "bottom.bg"),

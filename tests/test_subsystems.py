@@ -167,7 +167,7 @@ def test_show_draws_the_subsystem_tree(capsys):
 
 def test_check_json_counts_the_assembled_model(capsys):
     assert main(["check", "--json", str(HERE / "ladder.bg")]) == 0
-    record = json.loads(capsys.readouterr().out)
+    (record,) = json.loads(capsys.readouterr().out)["files"]
     assert (record["components"], record["bonds"]) == (14, 13)
     assert record["parameters"]["s3.c"] == "k" and record["unknown"] == ["k"]
 
@@ -213,7 +213,7 @@ def test_errors_two_levels_down_are_placed_in_their_file_with_notes(capsys):
         f"note: in subsystem mid ({top}:4)",
     ]
     assert main(["check", "--json", str(top)]) == 2
-    (first, _) = json.loads(capsys.readouterr().out)["errors"]
+    (first, _) = json.loads(capsys.readouterr().out)["files"][0]["errors"]
     assert first["file"] == str(base / "bottom.bg") and first["line"] == 5
     assert first["notes"] == [f"in subsystem mid.b1 ({base / 'middle.bg'}:2)",
                               f"in subsystem mid ({top}:4)"]  # fmt: skip

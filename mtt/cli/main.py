@@ -130,9 +130,8 @@ def cmd_check(args) -> int:
             f"{file}: ok: {kind} {graph.name}, {record['components']} components, "
             f"{record['bonds']} bonds, {ends}{unknown}"
         )
-    if args.json:  # one document: a file's record, or for several {"ok", "files": [...]}
-        several = {"ok": all(r["ok"] for r in records), "files": records}
-        _print_json(records[0] if len(records) == 1 else several)
+    if args.json:  # one document, of one shape for one file or several
+        _print_json({"ok": all(r["ok"] for r in records), "files": records})
     return status
 
 
@@ -275,8 +274,7 @@ def make_parser() -> argparse.ArgumentParser:
     check.add_argument(
         "--json",
         action="store_true",
-        help='print one JSON document: the file\'s record, for several files {"ok": ..., '
-        '"files": [records in order]}',
+        help='print one JSON document, {"ok": ..., "files": [a record per file, in order]}',
     )
     check.add_argument(
         "--identifiability",
