@@ -11,6 +11,7 @@ import csv
 import os
 import warnings
 from concurrent.futures import ProcessPoolExecutor
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -66,6 +67,16 @@ def test_records_in_this_process_and_in_a_pool_give_the_same_numbers(dc_drive, l
     assert set(good) == {"file", "k", "k_se", "fit_percent", "warnings", "error"}
     # the results are the module's own classes, without the per-sample signals
     assert isinstance(here[0].result, dc_drive.Fit) and here[0].result.fitted == ()
+
+
+def test_a_spreadsheet_s_records_are_read_by_the_workers_too(dc_drive, logs, tmp_path):
+    """The module's reader, which the workers call, reads ';' and tab as mtt.data does."""
+    first = paths_of(logs)[0]
+    text = Path(first).read_text()
+    for name, delimiter in (("semicolons.csv", ";"), ("tabs.csv", "\t")):
+        (tmp_path / name).write_text(text.replace(",", delimiter))
+    batch = fit_many(dc_drive, [first, *paths_of(tmp_path)], jobs=2, hold="zoh")
+    assert batch.ok and batch[1].result.k == batch[2].result.k == batch[0].result.k
 
 
 def test_records_as_arrays_names_and_an_iterator(dc_drive):

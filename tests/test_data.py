@@ -78,6 +78,14 @@ def test_a_spreadsheet_s_semicolons_or_tabs_are_read_and_a_missing_column_says_c
         path = tmp_path / "semi.csv"
         path.write_text("\n".join(delimiter.join(row) for row in [("t", "u", "y"), *rows]))
         assert records.read(rlc, str(path)).y.tolist() == [0, 0.25, 0.5]
+        assert rlc.read_csv(str(path))[2].tolist() == [0, 0.25, 0.5]  # the module's own reader
+    bars = tmp_path / "bars.csv"
+    bars.write_text("\ufeffy|t|u\n0|0|1\n0.5|1|1\n")  # a byte-order mark, columns in any order
+    assert [column.tolist() for column in rlc.read_csv(str(bars))] == [[0, 1], [1, 1], [0, 0.5]]
+    short = tmp_path / "short.csv"  # the checked reader splits as the header line is split
+    short.write_text("t;u;y\n0;1;0\n1;1\n")
+    with pytest.raises(ValueError, match=r"short.csv:3: 2 values where the header names 3 columns"):
+        rlc.read_csv(str(short))
     wrong = tmp_path / "wrong.csv"
     wrong.write_text("time;volts;speed\n0;1;0\n1;1;0.5\n")
     with pytest.raises(DataError) as caught:

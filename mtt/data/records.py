@@ -10,10 +10,8 @@ came from and says in a note how each record was made (tables and figures print 
 from __future__ import annotations
 
 import csv
-import tempfile
 from collections.abc import Sequence
 from dataclasses import dataclass
-from pathlib import Path
 from types import ModuleType
 
 import numpy as np
@@ -27,7 +25,7 @@ from mtt.data import (
     SIGNAL_KINDS,
     DataError,
 )
-from mtt.present import tables, values
+from mtt.present import values
 
 COLUMNS = ("t", "u", "y")
 
@@ -60,24 +58,13 @@ def read(module: ModuleType, path: str, names: Sequence[str] = COLUMNS) -> Recor
     """A measured record: the columns `names` (time, input, output) of a CSV file, its
     times increasing strictly."""
     files.check_input(path, "data")  # a regular file of bounded size, not an output
-    delimiter = _delimiter(path)
-    try:
-        if delimiter == ",":
-            t, u, y = module.read_csv(path, tuple(names))
-        else:
-            with tempfile.TemporaryDirectory() as folder:  # the module reads commas
-                commas = Path(folder) / Path(path).name
-                commas.write_text(_with_commas(path, delimiter), encoding="utf-8")
-                t, u, y = module.read_csv(str(commas), tuple(names))
+    try:  # (the module reads a comma, ';', tab or '|' as the header line is split)
+        t, u, y = module.read_csv(path, tuple(names))
     except ValueError as error:  # the module's CSVError: its file, line and kind kept
-        text = str(error).replace(str(commas), str(path)) if delimiter != "," else str(error)
-        if "no column" not in text:
-            error.args = (text,)
-            if hasattr(error, "path"):
-                error.path = str(path)
+        if "no column" not in str(error):
             raise
         raise DataError(
-            f"{text}: name the time, input and output with columns T,U,Y (now {','.join(names)})",
+            f"{error}: name the time, input and output with columns T,U,Y (now {','.join(names)})",
             "columns", path=str(path), line=getattr(error, "line", None),
         ) from None  # fmt: skip
     _check_values(module, path, names, t, u, y)
@@ -85,7 +72,7 @@ def read(module: ModuleType, path: str, names: Sequence[str] = COLUMNS) -> Recor
     if late.size:  # named here: the module's message cannot name the file
         i = int(late[0])
         later, earlier = float(t[i + 1]), float(t[i])
-        line = _line_of_row(path, delimiter, i + 1)
+        line = _line_of_row(path, _delimiter(path), i + 1)
         raise DataError(
             f"{path}:{line}: the times (column {names[0]!r}) must increase strictly: "
             f"{later!r} (data row {i + 2}) follows {earlier!r} (data row {i + 1})",
@@ -145,16 +132,6 @@ def _delimiter(path: str) -> str:
     counts = {d: header.count(d) for d in DELIMITERS[1:]}
     best = max(counts, key=counts.get)
     return best if counts[best] else ","
-
-
-def _with_commas(path: str, delimiter: str) -> str:
-    """The file's text with `delimiter` between fields, as the module's reader takes it."""
-    with open(path, encoding="utf-8-sig", newline="") as file:
-        rows = csv.reader(file, delimiter=delimiter)
-        try:
-            return tables.csv_text(next(rows, []), rows)
-        except csv.Error as error:  # a field over csv's limit, say
-            raise ValueError(f"{path}:{rows.line_num}: not a CSV file: {error}") from None
 
 
 def input_signal(
