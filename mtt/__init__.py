@@ -14,6 +14,7 @@ from mtt.version import __version__ as __version__
 
 __all__ = [
     "Causality",
+    "Example",
     "Identifiability",
     "Model",
     "MttError",
@@ -21,7 +22,9 @@ __all__ = [
     "Theta",
     "TransferFunction",
     "TransferMatrix",
+    "copy_examples",
     "example",
+    "examples",
     "load",
 ]
 

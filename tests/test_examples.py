@@ -64,3 +64,21 @@ def test_an_unknown_example_names_those_there_are():
     with pytest.raises(mtt.MttError) as caught:
         mtt.example("nope")
     assert caught.value.kind == "io" and "dc_drive" in str(caught.value)
+
+
+def test_the_api_lists_and_copies_the_examples_as_the_command_does(tmp_path, capsys, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    listed = mtt.examples()
+    assert main(["examples", "--json"]) == 0
+    shown = json.loads(capsys.readouterr().out)["examples"]
+    assert [(e.name, e.description, str(e.path)) for e in listed] == [
+        (e["name"], e["description"], e["file"]) for e in shown
+    ]
+    assert {"dc_drive", "absorber", "rlc"} <= {e.name for e in listed}
+    written = mtt.copy_examples("mine")
+    assert (tmp_path / "mine" / "dc_drive.bg").read_bytes() == mtt.example("dc_drive").read_bytes()
+    assert len(written) >= len(listed) and mtt.copy_examples("mine") == []  # all there already
+    (tmp_path / "mine" / "rlc.bg").write_text("mine")
+    with pytest.raises(mtt.MttError, match="differs from the example: not replaced"):
+        mtt.copy_examples("mine")
+    assert mtt.copy_examples("mine", force=True) == [Path("mine", "rlc.bg")]

@@ -3,6 +3,7 @@
 See docs/api.md. Everything here is also `mtt.NAME`.
 """
 
+from mtt.api.examples import Example, copy_examples, examples
 from mtt.api.loading import example, load
 from mtt.api.matrix import TransferMatrix
 from mtt.api.model import Model
@@ -12,6 +13,7 @@ from mtt.language.diagnostics import MttError
 
 __all__ = [
     "Causality",
+    "Example",
     "Identifiability",
     "Model",
     "MttError",
@@ -19,6 +21,8 @@ __all__ = [
     "Theta",
     "TransferFunction",
     "TransferMatrix",
+    "copy_examples",
     "example",
+    "examples",
     "load",
 ]

@@ -7,7 +7,6 @@ from __future__ import annotations
 
 import argparse
 import json
-import os
 import sys
 from pathlib import Path
 
@@ -215,67 +214,26 @@ def _bode_matrix(args, model, points: list[dict], labels: list) -> int:
 
 
 def cmd_examples(args) -> int:
-    from mtt import files
-    from mtt.derivation.pipeline import read_source
-    from mtt.language.parse import parse
+    from mtt.api.examples import copy_examples, examples
     from mtt.resources import resource_dir
 
-    directory = resource_dir("models")
-    listed = []
-    for path in sorted(directory.glob("*.bg")):
-        header = parse(read_source(path)).header
-        listed.append({"name": path.stem, "description": header.description if header else None,
-                       "file": str(path)})  # fmt: skip
+    listed = examples()
     copied = []
     if args.copy is not None:
-        # every file: a model's subsystem files (models/parts/) come with it; each checked
-        # before any is written
-        copies = [_example_copy(path, Path(args.copy) / path.relative_to(directory), args.force)
-                  for path in sorted(directory.rglob("*.bg"))]  # fmt: skip
-        # DIR is made where --parents allows; its subdirectories are the copy's own
-        parents = args.parents or Path(args.copy).is_dir()
-        for destination, data in (copy for copy in copies if copy is not None):
-            _said_as_io(destination, files.write_atomic, destination, data, parents=parents)
-            copied.append(str(destination))
+        copied = copy_examples(args.copy, force=args.force, parents=args.parents)
     if args.json:
-        _print_json({"ok": True, "examples": listed, "copied": copied})
+        _print_json({"ok": True, "copied": [str(path) for path in copied], "examples": [
+            {"name": e.name, "description": e.description, "file": str(e.path)} for e in listed
+        ]})  # fmt: skip
         return EXIT_OK
     if args.copy is not None:
         print(f"copied {len(copied)} example model(s) to {args.copy}")
         return EXIT_OK
-    width = max(len(item["name"]) for item in listed)
-    for item in listed:
-        print(f"{item['name']:{width}}  {item['description'] or ''}".rstrip())
-    print(f"\n(in {directory}; mtt examples --copy DIR copies them)")
+    width = max(len(example.name) for example in listed)
+    for example in listed:
+        print(f"{example.name:{width}}  {example.description or ''}".rstrip())
+    print(f"\n(in {resource_dir('models')}; mtt examples --copy DIR copies them)")
     return EXIT_OK
-
-
-def _example_copy(example: Path, destination: Path, force: bool) -> tuple[Path, bytes] | None:
-    """What copying one shipped model writes; None when `destination` already holds it. A
-    different file there is kept unless `force`; anything but a regular file is refused."""
-    from mtt import files
-
-    def read(path: Path, limit: int, recorded: bool) -> bytes:
-        return files.read_bytes(path, "a model file", limit, recorded=recorded)
-
-    data = _said_as_io(destination, read, example, files.MAX_MODEL_BYTES, True)
-    if not os.path.lexists(destination):
-        return destination, data
-    if _said_as_io(destination, read, destination, len(data), False) == data:
-        return None
-    if not force:
-        message = f"{destination} exists and differs from the example: not replaced "
-        raise MttError(message + "(--force replaces it)", kind="io", file=str(destination))
-    return destination, data
-
-
-def _said_as_io(destination: Path, action, *arguments, **options):
-    """`action(...)`, its OSError said as the user's error about `destination`."""
-    try:
-        return action(*arguments, **options)
-    except OSError as exc:
-        where = exc.filename or str(destination)
-        raise MttError(f"{where}: {exc.strerror}: not replaced", kind="io", file=where) from None
 
 
 def register(commands) -> None:
