@@ -4881,6 +4881,7 @@ class Tracker:
 
 MAX_CSV_BYTES = 1 << 30  # a CSV file: ten million samples of three numbers fit
 MAX_CSV_LINE = 1 << 16  # characters in one line (a row, or the header)
+CSV_DELIMITERS = (",", ";", "\t", "|")  # a comma, else what the header line is split by
 _NUMBER = re.compile(r"[+-]?(?:[0-9]+\.?[0-9]*|\.[0-9]+)(?:[eE][+-]?[0-9]+)?")
 
 
@@ -4923,9 +4924,20 @@ def _open_csv(path):
         raise
 
 
-def _csv_lines(file, path, commas: int | None = None):
+def _delimiter(header: str) -> str:
+    """The header line's delimiter: a comma, unless the line has none and splits on another
+    of CSV_DELIMITERS (a spreadsheet's ';', a tab)."""
+    if "," in header:
+        return ","
+    counts = {delimiter: header.count(delimiter) for delimiter in CSV_DELIMITERS[1:]}
+    best = max(counts, key=counts.get)
+    return best if counts[best] else ","
+
+
+def _csv_lines(file, path, commas: int | None = None, delimiter: str = ","):
     """The file's lines, read one at a time, each at most MAX_CSV_LINE characters; with
-    `commas`, each must hold that many (else `_Irregular`: a row to look at closely)."""
+    `commas`, each must hold that many delimiters (else `_Irregular`: a row to look at
+    closely)."""
     number = 0
     while True:
         line = file.readline(MAX_CSV_LINE + 1)
@@ -4934,7 +4946,7 @@ def _csv_lines(file, path, commas: int | None = None):
         number += 1
         if len(line) > MAX_CSV_LINE and line[-1] not in "\r\n":
             raise CSVError(path, number, f"a line longer than {MAX_CSV_LINE} characters")
-        if commas is not None and line.count(",") != commas and line.strip():
+        if commas is not None and line.count(delimiter) != commas and line.strip():
             raise _Irregular
         yield line
 
@@ -4946,7 +4958,9 @@ class _Irregular(Exception):
 def read_csv(path, columns: tuple[str, ...] = ("t", "u", "y")) -> tuple[np.ndarray, ...]:
     """The named columns of a CSV file with a header row, as float arrays, in that order.
 
-    A UTF-8 byte-order mark is read as nothing; every row must have the header's number of
+    Fields are separated by commas, or by what the header line is split by when it has no
+    comma (CSV_DELIMITERS: a spreadsheet's ';', a tab, '|'). A UTF-8 byte-order mark is
+    read as nothing; every row must have the header's number of
     values, and every value read must be a finite decimal number (no "1_0", "nan" or
     "inf"). Anything else, a file that is not a regular file of at most MAX_CSV_BYTES, or a
     line longer than MAX_CSV_LINE characters, is a CSVError (a ValueError) naming the
@@ -4965,14 +4979,16 @@ def _read_plain_csv(path, columns: tuple[str, ...]) -> tuple[np.ndarray, ...] | 
             header = file.readline(MAX_CSV_LINE + 1)
             if "\"" in header or "\r" in header.rstrip("\r\n") or len(header) > MAX_CSV_LINE:
                 return None
-            names = [name.strip() for name in header.rstrip("\r\n").split(",")]
+            delimiter = _delimiter(header)
+            names = [name.strip() for name in header.rstrip("\r\n").split(delimiter)]
             if len(set(names)) < len(names) or not set(columns) <= set(names):
                 return None
+            lines = _csv_lines(file, path, commas=len(names) - 1, delimiter=delimiter)
             with warnings.catch_warnings():
                 warnings.simplefilter("error")  # an empty file after the header warns
-                values = np.loadtxt(_csv_lines(file, path, commas=len(names) - 1), delimiter=",",
-                                    usecols=[names.index(c) for c in columns], ndmin=2,
-                                    comments=None, encoding=None)  # fmt: skip
+                values = np.loadtxt(lines, delimiter=delimiter, ndmin=2, comments=None,
+                                    usecols=[names.index(c) for c in columns],
+                                    encoding=None)  # fmt: skip
     except (OSError, ValueError, UnicodeDecodeError, UserWarning, _Irregular):
         return None
     if values.shape[0] == 0 or not np.isfinite(values).all():
@@ -4984,7 +5000,12 @@ def _read_csv_checked(path, columns: tuple[str, ...]) -> tuple[np.ndarray, ...]:
     """read_csv, cell by cell: every problem named with its file, line and column."""
     with _open_csv(path) as file:
         try:
-            reader = csv.reader(_csv_lines(file, path))
+            delimiter = _delimiter(file.readline(MAX_CSV_LINE + 1))
+        except UnicodeDecodeError:
+            delimiter = ","  # (said below, with the byte)
+        file.seek(0)
+        try:
+            reader = csv.reader(_csv_lines(file, path), delimiter=delimiter)
             rows = _csv_rows(reader, path, columns)
         except UnicodeDecodeError as error:
             raise CSVError(path, None, f"not UTF-8 text (byte {error.start}: {error.reason})") from None
