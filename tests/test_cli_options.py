@@ -121,5 +121,7 @@ def test_names_take_commas_and_spaces_alike(capsys):
         err = capsys.readouterr().err
         assert f"argument {option}: 'models/absorber.bg' is a model file, not an item" in err
         assert "put the model file before the option, or end the list with --" in err
+    for signals in (["Df:i1,Df:i2"], ["Df:i1", "Df:i2"]):  # several outputs
+        assert parse(["tf", "m.bg", "--output", *signals]).output == ["Df:i1", "Df:i2"]
     args = parse(["tf", "--keep", "tau", "l", "--", "models/absorber.bg"])
     assert (args.keep, args.file) == (["tau", "l"], "models/absorber.bg")

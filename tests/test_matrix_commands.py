@@ -102,7 +102,7 @@ def test_ss_names_each_input_and_output(capsys):
 def test_check_and_show_name_every_input_and_output(capsys):
     status, out, _ = run(capsys, "check", MOTOR, *BOTH)
     assert status == 0 and "inputs Se:v and Se:tl, outputs Df:speed and Df:current" in out
-    record = json.loads(run(capsys, "check", MOTOR, *BOTH, "--json")[1])
+    (record,) = json.loads(run(capsys, "check", MOTOR, *BOTH, "--json")[1])["files"]
     assert (record["input"], record["output"]) == ("Se:v,Se:tl", "Df:speed,Df:current")
     out = run(capsys, "show", MOTOR, *BOTH)[1]
     assert "inputs  Se:v and Se:tl" in out.splitlines()

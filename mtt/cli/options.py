@@ -72,15 +72,22 @@ def _point(text: str) -> list[tuple[str, object]]:
     return values
 
 
-def _components(text: str) -> str:
-    """TYPE:NAME, or several separated by commas (several inputs or outputs)."""
-    for part in text.split(","):
-        kind, colon, name = part.strip().partition(":")
+def _components(text: str) -> list[str]:
+    """TYPE:NAME, or several (several inputs or outputs) as every list is given."""
+    parts = words(text)
+    for part in parts:
+        kind, colon, name = part.partition(":")
         if not (colon and kind and _is_name(name)):
             raise argparse.ArgumentTypeError(
-                f"expected TYPE:NAME, not {text!r} (several: TYPE:NAME,TYPE:NAME)"
+                f"expected TYPE:NAME, not {part!r} (several: TYPE:NAME,TYPE:NAME or "
+                "TYPE:NAME TYPE:NAME)"
             )
-    return text
+    return parts
+
+
+def _signals(given: list[str] | None) -> str | None:
+    """--input or --output as the model's selection takes it (several joined by commas)."""
+    return None if not given else ",".join(given)
 
 
 def words(text: str) -> list[str]:
@@ -128,9 +135,10 @@ def add_selection_options(parser: argparse.ArgumentParser) -> None:
             f"--{role}",
             metavar="TYPE:NAME",
             type=_components,
+            nargs="+",
+            action=Flatten,
             help=f"the {what} to use as the {role}, over the file's '{role}' statement "
-            f"(e.g. {example}); several {what}s, separated by commas, for several "
-            f"{role}s",
+            f"(e.g. {example}); several {what}s for several {role}s",
         )
     group.add_argument(
         "--time-limit",
@@ -235,7 +243,9 @@ def _unknowns(args: argparse.Namespace) -> tuple[str, ...] | None:
 def selection_from_args(args: argparse.Namespace) -> Selection:
     from mtt.language.bondgraph import Selection
 
-    return Selection(_unknowns(args), args.input, args.output, tuple(args.include))
+    return Selection(
+        _unknowns(args), _signals(args.input), _signals(args.output), tuple(args.include)
+    )
 
 
 def choice_from_args(args: argparse.Namespace) -> ParameterChoice:
@@ -248,8 +258,8 @@ def choice_from_args(args: argparse.Namespace) -> ParameterChoice:
         keep=frozenset(getattr(args, "keep", ())),  # commands with selection options only
         symbolic=getattr(args, "symbolic", False),
         overrides=MappingProxyType(dict(getattr(args, "overrides", ()))),
-        input=args.input,
-        output=args.output,
+        input=_signals(args.input),
+        output=_signals(args.output),
         budget=DEFAULT_BUDGET if terms is None else Budget(terms),
         at=MappingProxyType(dict(args.at)) if getattr(args, "at", None) else None,
         branch=getattr(args, "branch", None),
