@@ -17,12 +17,15 @@ from mtt.cli.running import EXIT_OK, UsageError, say, warn
 SETTINGS = ("noise", "C", "k0", "bounds", "offset", "initial_state", "hold")  # fit_signals'
 
 
-def columns_for(module: ModuleType, given: str | None) -> tuple[str, ...]:
-    """The CSV columns of the time, each input and each output, in that order."""
+def columns_for(module: ModuleType, given: str | list[str] | None) -> tuple[str, ...]:
+    """The CSV columns of the time, each input and each output, in that order (--columns
+    as a list, or text with commas)."""
     default = ("t", *module.INPUTS, *module.OUTPUTS)
     if given is None:
         return default
-    names = tuple(name.strip() for name in given.split(","))
+    parts = given.split(",") if isinstance(given, str) else given
+    names = tuple(name.strip() for name in parts)
+    given = ",".join(names)
     if len(names) != len(default) or not all(names) or len(set(names)) != len(names):
         raise UsageError(
             f"--columns takes {len(default)} different names: the time, then the inputs "
