@@ -144,8 +144,8 @@ def add_selection_options(parser: argparse.ArgumentParser) -> None:
         "--time-limit",
         metavar="SECONDS",
         type=_seconds,
-        help="stop deriving after this long with a too_large error (default 30, or "
-        "MTT_TIME_LIMIT from the environment; inf for none)",
+        help="stop deriving after this many seconds of processor time with a too_large error "
+        "(default 30, or MTT_TIME_LIMIT from the environment; inf for none)",
     )
     group.add_argument(
         "--include",

@@ -1,13 +1,16 @@
 """A time limit on the derivation: a model from someone else cannot keep mtt busy for
-minutes. The size limits (mtt.language.measures, the derivation's own) bound the work
-they can foresee; this bounds the rest: past its time, a stage of the derivation stops
-with `too_large`, placed at the model's name.
+minutes. The limit is processor time of mtt's process, not time on the wall, so that the
+same model ends the same way on an idle machine and on a busy one. The size limits
+(mtt.language.measures, the derivation's own) bound the work they can foresee; this bounds
+the rest: past its time, a stage of the derivation stops with `too_large`, placed at the
+model's name.
 
 Each stage (`derive`, `transfer_function`, identifiability) is `timed`: its loops call
-`check()`, which works in any thread, and on the main thread a timer signal interrupts a
-single long computation inside sympy as well. A `budget` (one per command of the `mtt`
-program) is shared by the stages run inside it; outside one, each stage has the whole
-limit: `MTT_TIME_LIMIT` seconds from the environment, else `DEFAULT_SECONDS`.
+`check()`, which works in any thread, and on the main thread a timer signal (SIGPROF,
+counting processor time) interrupts a single long computation inside sympy as well. A
+`budget` (one per command of the `mtt` program) is shared by the stages run inside it;
+outside one, each stage has the whole limit: `MTT_TIME_LIMIT` seconds from the
+environment, else `DEFAULT_SECONDS`.
 """
 
 from __future__ import annotations
@@ -70,7 +73,7 @@ def check() -> None:
     """Raise `OutOfTime` when the running stage is past its deadline (cheap: call it in
     loops)."""
     deadline = _DEADLINE.get()
-    if deadline is not None and time.monotonic() > deadline:
+    if deadline is not None and time.process_time() > deadline:
         raise OutOfTime
 
 
@@ -80,23 +83,24 @@ def _alarm(signum, frame):
 
 @contextlib.contextmanager
 def _interrupting(seconds: float) -> Iterator[None]:
-    """On the main thread, a SIGALRM after `seconds` (when no one else uses SIGALRM)."""
+    """On the main thread, a SIGPROF after `seconds` of processor time (when no one else
+    uses SIGPROF)."""
     usable = (
         hasattr(signal, "setitimer")
         and threading.current_thread() is threading.main_thread()
-        and signal.getsignal(signal.SIGALRM) in (signal.SIG_DFL, None)
+        and signal.getsignal(signal.SIGPROF) in (signal.SIG_DFL, None)
         and math.isfinite(seconds)
     )
     if not usable:
         yield
         return
-    previous = signal.signal(signal.SIGALRM, _alarm)
-    signal.setitimer(signal.ITIMER_REAL, max(seconds, 1e-3))
+    previous = signal.signal(signal.SIGPROF, _alarm)
+    signal.setitimer(signal.ITIMER_PROF, max(seconds, 1e-3))
     try:
         yield
     finally:
-        signal.setitimer(signal.ITIMER_REAL, 0)
-        signal.signal(signal.SIGALRM, previous)
+        signal.setitimer(signal.ITIMER_PROF, 0)
+        signal.signal(signal.SIGPROF, previous)
 
 
 def timed(stage: str, graph_of: Callable) -> Callable:
@@ -111,7 +115,7 @@ def timed(stage: str, graph_of: Callable) -> Callable:
             shared = _BUDGET.get()
             limit = shared.seconds if shared else default_seconds()
             left = limit - (shared.used if shared else 0.0)
-            start = time.monotonic()
+            start = time.process_time()
             token = _DEADLINE.set(start + left)
             try:
                 if left <= 0:
@@ -123,7 +127,7 @@ def timed(stage: str, graph_of: Callable) -> Callable:
             finally:
                 _DEADLINE.reset(token)
                 if shared:
-                    shared.used += time.monotonic() - start
+                    shared.used += time.process_time() - start
 
         return run
 
@@ -132,8 +136,8 @@ def timed(stage: str, graph_of: Callable) -> Callable:
 
 def _too_slow(graph, stage: str, seconds: float) -> ModelError:
     message = (
-        f"the derivation ({stage}) took more than {seconds:g} s (a limit): the model is too "
-        "large, or its values too intricate, for exact algebra in that time; "
+        f"the derivation ({stage}) took more than {seconds:g} s of processor time (a limit): "
+        "the model is too large, or its values too intricate, for exact algebra in that time; "
         "--time-limit SECONDS (MTT_TIME_LIMIT in the environment) allows more"
     )
     return ModelError(graph.source, [error("too_large", message, graph.name_position)])
