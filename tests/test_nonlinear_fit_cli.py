@@ -10,10 +10,10 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from inprocess import run_mtt
 from nonlinear_records import held, noisy, pump, weir_rhs
 
 import mtt
-from mtt.cli.main import main
 
 ROOT = Path(__file__).resolve().parent.parent
 MODEL = str(ROOT / "models" / "two_tanks.bg")
@@ -37,15 +37,6 @@ def _write(path: Path, t, u, y) -> str:
         )
     )
     return str(path)
-
-
-def run_mtt(capsys, *args: str) -> tuple[int, str, str]:
-    try:
-        status = main(list(args))
-    except SystemExit as exit:
-        status = exit.code
-    out, err = capsys.readouterr()
-    return status, out, err
 
 
 def test_mtt_fit_of_a_nonlinear_model_reports_and_validates_as_the_linear_one(tmp_path, capsys):

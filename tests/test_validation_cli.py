@@ -15,10 +15,10 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from inprocess import run_mtt
 from scipy import signal
 
 from mtt.batch import fit_many
-from mtt.cli.main import main
 from mtt.language.diagnostics import MttError
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -26,15 +26,6 @@ MODEL = str(ROOT / "models" / "dc_drive.bg")
 SIMULATED = ["--signal", "prbs", "--period", "1", "--t-end", "60", "--dt", "0.02", "--hold", "zoh",
              "--noise-snr", "20"]  # fmt: skip
 OFFSET = 0.4
-
-
-def run_mtt(capsys, *args: str) -> tuple[int, str, str]:
-    try:
-        status = main(list(args))
-    except SystemExit as exit:
-        status = exit.code
-    out, err = capsys.readouterr()
-    return status, out, err
 
 
 def write(path: Path, t, u, y, names=("t", "u", "y")) -> Path:
