@@ -13,7 +13,7 @@ from mtt.derivation.parameters import ParameterChoice, parametrise
 from mtt.derivation.small_signal import small_signal
 from mtt.derivation.structure import causal_for
 from mtt.derivation.theta import Theta
-from mtt.derivation.transfer import TransferFunction, transfer_function
+from mtt.derivation.transfer import TransferFunction, signal_labels, transfer_function
 from mtt.derivation.transfer_matrix import estimator_theta
 from mtt.language.bondgraph import BondGraph, Selection, build
 from mtt.language.diagnostics import ModelError, error
@@ -52,9 +52,9 @@ def equations_for(
 def _one_signal(graph: BondGraph) -> None:
     """The state equations x' = f(x, u), y = g(x, u) have one input and one output."""
     if graph.several:
-        labels = lambda names: ", ".join(graph.component(n).label for n in names)  # noqa: E731
+        inputs, outputs = signal_labels(graph, graph.inputs), signal_labels(graph, graph.outputs)
         message = (
-            f"from {labels(graph.inputs)} to {labels(graph.outputs)}: the state equations "
+            f"from {inputs} to {outputs}: the state equations "
             "x' = f(x, u), y = g(x, u) (a nonlinear model's, its equilibria and its "
             "small-signal model) take one input and one output: choose them with --input "
             "TYPE:NAME --output TYPE:NAME"

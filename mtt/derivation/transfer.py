@@ -23,6 +23,7 @@ from mtt.derivation import constants, deadline, sparse
 from mtt.derivation.budget import Meter, TooLarge, refusal
 from mtt.derivation.elimination import bordered_ratio
 from mtt.derivation.equations import Equations
+from mtt.language.bondgraph import BondGraph
 from mtt.language.diagnostics import ModelError, error
 from mtt.language.measures import MAX_DIGITS
 
@@ -163,12 +164,20 @@ def _transfer_function(equations: Equations, meter: Meter) -> TransferFunction:
     return tf
 
 
+def signal_labels(graph: BondGraph, names) -> str:
+    """Sources or detectors as the user writes them (Se:v, Df:i), for a message."""
+    return ", ".join(graph.component(name).label for name in names)
+
+
 def several_signals(equations: Equations) -> ModelError:
     """What is said where a step takes one input and one output and the model has more."""
     graph = equations.causal.bondgraph
-    labels = lambda names: ", ".join(graph.component(n).label for n in names)  # noqa: E731
+    inputs, outputs = (
+        signal_labels(graph, equations.inputs),
+        signal_labels(graph, equations.outputs),
+    )
     message = (
-        f"from {labels(equations.inputs)} to {labels(equations.outputs)}: several inputs or "
+        f"from {inputs} to {outputs}: several inputs or "
         "outputs make a transfer matrix (mtt ss, tf, theta, identifiability and bode derive "
         "it, and Model.transfer_matrix); this step takes one input and one output: choose "
         "them with --input TYPE:NAME --output TYPE:NAME (input=, output= in mtt.load)"
