@@ -11,13 +11,10 @@ is safe to run, and the same Theta always gives the same bytes.
 from __future__ import annotations
 
 import importlib.machinery
-import keyword
 import linecache
 import math
 import os
-import re
 import sys
-import textwrap
 import types
 from functools import cache
 from pathlib import Path
@@ -27,6 +24,15 @@ import sympy
 
 from mtt.derivation.theta import Theta, refuse_cancelled
 from mtt.estimator import advice
+from mtt.estimator.literals import (
+    doc_text,
+    docstring_safe,
+    finite_float,
+    is_name,
+    literal,
+    number,
+    wrapped,
+)
 from mtt.language.diagnostics import ModelError, Source, error
 from mtt.resources import resource_dir
 from mtt.version import __version__
@@ -42,9 +48,6 @@ RESERVED = frozenset(
 # Run by the interpreter at start-up wherever they are on its path (as are a package's
 # __init__ and __main__: every __dunder__ name is refused too).
 SPECIAL_MODULES = frozenset({"sitecustomize", "usercustomize"})
-# Characters that sympy's printing of an exact number may use; text made only of them
-# cannot end a docstring or a string literal.
-_PLAIN = re.compile(r"[\w .*/+\-()]+")
 
 
 def _fail(theta: Theta, kind: str, message: str, name: str | None = None) -> ModelError:
@@ -106,51 +109,12 @@ def _check(theta: Theta) -> None:
     refuse_cancelled(theta)
 
 
-def is_name(name: str, dotted: bool = True) -> bool:
-    """A model-derived name the generated code may carry (as a string, through repr): an
-    identifier that is no keyword, or (`dotted`) a subsystem's dotted path of them."""
-    parts = name.split(".") if dotted else [name]
-    return all(part.isidentifier() and not keyword.iskeyword(part) for part in parts)
-
-
-def _number(value: sympy.Expr) -> str:
-    """Python text for an exact real number: integers and fractions exact, others as floats."""
-    if value.is_Integer:
-        return str(int(value))
-    if value.is_Rational:
-        return f"{int(value.p)} / {int(value.q)}"
-    return repr(_float(value))
-
-
-def _float(value: sympy.Expr) -> float:
-    number = sympy.N(value, 30)
-    if not (number.is_real and number.is_finite):
-        raise ValueError(f"not a finite real number: {value}")
-    return float(number)
-
-
-def _doc_text(text: str) -> str:
-    """Text for the docstring: as it is when plain (names, numbers, operators), else repr'd."""
-    return text if _PLAIN.fullmatch(text) else _docstring_safe(text)
-
-
-def _wrapped(label: str, polynomial: sympy.Expr) -> str:
-    """`label = polynomial` for the docstring, wrapped between terms."""
-    lines = textwrap.wrap(
-        f"{label} = {_doc_text(str(polynomial))}",
-        width=84,
-        subsequent_indent=" " * (len(label) + 3),
-        break_on_hyphens=False,
-    )
-    return "\n        ".join(lines)
-
-
 def _in_range(theta: Theta, value: sympy.Expr, name: str | None = None) -> sympy.Expr:
     """value (of the parameter `name`, or else a coefficient of Theta), unless the module's
     floating point cannot hold it (it would overflow to inf or vanish): then an error."""
     what = "a coefficient of Theta" if name is None else f"the value of {name}"
     try:
-        number = _float(value)
+        number = finite_float(value)
     except (OverflowError, ValueError):
         number = math.inf
     if not math.isfinite(number) or (number == 0 and value != 0):
@@ -168,7 +132,7 @@ def _in_range(theta: Theta, value: sympy.Expr, name: str | None = None) -> sympy
 def _entry(theta: Theta, expr: sympy.Expr, symbols: list[sympy.Symbol]) -> str:
     """Python text for one entry of Theta, each kept parameter read as p['name']."""
     if not symbols:
-        return _number(_in_range(theta, expr))
+        return number(_in_range(theta, expr))
     try:
         poly = sympy.Poly(expr, *symbols)
     except sympy.PolynomialError:
@@ -187,35 +151,17 @@ def _entry(theta: Theta, expr: sympy.Expr, symbols: list[sympy.Symbol]) -> str:
             if power
         ]
         if not factors:
-            terms.append(_number(coefficient))
+            terms.append(number(coefficient))
         elif abs(coefficient) == 1:
             terms.append(("-" if coefficient < 0 else "") + " * ".join(factors))
         else:
-            terms.append(" * ".join([_number(coefficient), *factors]))
+            terms.append(" * ".join([number(coefficient), *factors]))
     if not terms:
         return "0"
     text = terms[0]
     for term in terms[1:]:
         text += f" - {term[1:]}" if term.startswith("-") else f" + {term}"
     return text
-
-
-def _docstring_safe(value: object) -> str:
-    """repr(value), escaped to read as itself inside a (non-raw, triple-quoted) docstring."""
-    return repr(value).replace("\\", "\\\\").replace('"', '\\"')
-
-
-def _literal(text: str | None, width: int = 76) -> str:
-    """A Python literal for `text`: repr'd pieces, one per line when it is long."""
-    if text is None or len(text) <= width:
-        return repr(text)
-    pieces = []
-    while len(text) > width:
-        cut = text.rfind(" ", 0, width) + 1 or width
-        pieces.append(text[:cut])
-        text = text[cut:]
-    pieces.append(text)
-    return "(\n" + "".join(f"    {piece!r}\n" for piece in pieces) + ")"
 
 
 @cache
@@ -227,8 +173,8 @@ def environment() -> jinja2.Environment:
         autoescape=False,
     )
     environment.filters["repr"] = repr
-    environment.filters["doc"] = _docstring_safe
-    environment.filters["literal"] = _literal
+    environment.filters["doc"] = docstring_safe
+    environment.filters["literal"] = literal
     return environment
 
 
@@ -248,14 +194,14 @@ def _context(theta: Theta) -> dict:
     defaults = {name: theta.defaults.get(name) for name in theta.symbols}
     several = len(theta.unknowns) > 1
     given = {
-        name: _float(_in_range(theta, value, name))
+        name: finite_float(_in_range(theta, value, name))
         for name, value in theta.true_values.items()
         if value is not None and name in theta.unknowns
     }
     examples = [given.get(name, 1.0) for name in theta.unknowns]
     if several:
         true_value = ", ".join(
-            f"{name} = {_doc_text(str(theta.true_values[name]))}" for name in given
+            f"{name} = {doc_text(str(theta.true_values[name]))}" for name in given
         )
         true_float = repr(tuple(given.get(name) for name in theta.unknowns))
         example_k, example_k0 = repr(examples), repr([value / 2 for value in examples])
@@ -264,7 +210,7 @@ def _context(theta: Theta) -> dict:
         )
     else:
         value = theta.true_value
-        true_value = None if value is None else _doc_text(str(value))
+        true_value = None if value is None else doc_text(str(value))
         true_float = "None" if value is None else repr(examples[0])
         example_k, example_k0 = repr(examples[0]), repr(examples[0] / 2)
         example_option = example_k0
@@ -288,18 +234,18 @@ def _context(theta: Theta) -> dict:
         "true_value": true_value or None,
         "true_value_float": true_float,
         "transfer": f"({theta.num})/({theta.den})",
-        "numerator": _wrapped("B(s)", theta.num),
-        "denominator": _wrapped("A(s)", theta.den),
+        "numerator": wrapped("B(s)", theta.num),
+        "denominator": wrapped("A(s)", theta.den),
         **{"n": theta.n, "m": theta.m, "N": theta.N},
-        "assumed": ", ".join(f"{name} = {_doc_text(str(v))}" for name, v in theta.assumed.items()),
+        "assumed": ", ".join(f"{name} = {doc_text(str(v))}" for name, v in theta.assumed.items()),
         "symbols": theta.symbols,
         "parameters_doc": ", ".join(
-            f"{name} = {_doc_text(str(value))}" if value is not None else f"{name} (no value)"
+            f"{name} = {doc_text(str(value))}" if value is not None else f"{name} (no value)"
             for name, value in defaults.items()
         ),
         "defaults": repr(
             {
-                name: None if value is None else _float(_in_range(theta, value, name))
+                name: None if value is None else finite_float(_in_range(theta, value, name))
                 for name, value in defaults.items()
             }
         ),  # fmt: skip

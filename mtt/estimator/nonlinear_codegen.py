@@ -18,8 +18,9 @@ from typing import TYPE_CHECKING
 
 import sympy
 
-from mtt.estimator.codegen import environment, is_name, load_source, module_path, shadows
+from mtt.estimator.codegen import environment, load_source, module_path, shadows
 from mtt.estimator.kernels import SIDE, TIE, Frozen, KernelError, freeze, kernel
+from mtt.estimator.literals import finite_float, is_name
 from mtt.estimator.rosenbrock import sensitivity_kernel, step_kernel
 from mtt.language.diagnostics import ModelError, Source, error
 from mtt.version import __version__
@@ -143,13 +144,6 @@ def _kernels(system: NonlinearStateSpace, kept: list[sympy.Symbol]) -> tuple[Fro
     return frozen, kernels
 
 
-def _float(value: sympy.Expr) -> float:
-    number = sympy.N(value, 30)
-    if not (number.is_real and number.is_finite):
-        raise ValueError(f"not a finite real number: {value}")
-    return float(number)
-
-
 def _context(
     system: NonlinearStateSpace, values: dict[str, sympy.Expr], description: str | None
 ) -> dict:
@@ -162,7 +156,7 @@ def _context(
     jumps = [switch for switch in frozen.switches if not switch.continuous]
     unknowns = tuple(symbol.name for symbol in system.unknowns)
     p = len(unknowns)
-    given = {name: _float(values[name]) for name in unknowns if values.get(name) is not None}
+    given = {name: finite_float(values[name]) for name in unknowns if values.get(name) is not None}
     complete = all(name in given for name in unknowns)
     values = [given[name] for name in unknowns] if complete else None
     true_float = repr(values and (values[0] if p == 1 else tuple(values)))
@@ -214,7 +208,7 @@ def _context(
 
 
 def _maybe_float(value: sympy.Expr | None) -> float | None:
-    return None if value is None else _float(value)
+    return None if value is None else finite_float(value)
 
 
 def render(
