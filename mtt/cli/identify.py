@@ -1,5 +1,6 @@
-"""`mtt identifiability`: can input/output data tell the unknowns apart? Also the
-`not_identifiable` warning of `mtt check` and `mtt compile`.
+"""`mtt identifiability`: can input/output data tell the unknowns apart? Also `mtt
+compile`'s `not_identifiable` warning, printed before it writes (mtt.derivation.checking
+derives it, for `mtt check --identifiability` too).
 
 The argparse wiring is light; the command imports sympy and the stages when it runs.
 """
@@ -8,17 +9,10 @@ from __future__ import annotations
 
 import json
 import sys
-from dataclasses import replace
-from typing import TYPE_CHECKING
 
 from mtt.cli import loading
 from mtt.cli.options import add_parameter_options
 from mtt.language.diagnostics import MttError
-
-if TYPE_CHECKING:
-    from mtt.derivation.parameters import ParameterChoice
-    from mtt.language.bondgraph import BondGraph
-    from mtt.language.diagnostics import Diagnostic
 
 EXIT_OK = 0
 
@@ -67,50 +61,12 @@ def cmd_identifiability(args) -> int:
     return EXIT_OK
 
 
-def warnings(graph: BondGraph, choice: ParameterChoice) -> list[Diagnostic]:
-    """The `not_identifiable` warning of a model whose unknowns are not globally
-    identifiable; nothing when it has none or its transfer function cannot be derived
-    (the commands that derive it report why)."""
-    from mtt.derivation.identifiability import (
-        identifiability,
-        matrix_identifiability,
-        warning_for,
-    )
-    from mtt.derivation.pipeline import equations_for
-    from mtt.derivation.theta import theta_matrix
-    from mtt.derivation.transfer import transfer_function
-    from mtt.derivation.transfer_matrix import transfer_matrix
-    from mtt.language.diagnostics import Origin
-
-    if not graph.unknowns:
-        return []
-    try:
-        equations = equations_for(graph, choice, identify=True)
-        if equations.several:
-            matrix = transfer_matrix(equations)
-        else:
-            theta = theta_matrix(transfer_function(equations))
-    except MttError:
-        return []
-    positions = {name: p.position for name, p in graph.parameters.items()}
-    try:
-        if equations.several:
-            result = matrix_identifiability(matrix, parts=False)
-        else:
-            result = identifiability(theta)
-        found = warning_for(result, positions)
-    except MttError:  # undecidable here (mtt identifiability says why)
-        return []
-    if found is None:
-        return []
-    return [found if found.origin else replace(found, origin=Origin(graph.source))]
-
-
 def warn_on_compile(run):
     """`mtt compile`, printing the `not_identifiable` warning first."""
 
     def compile_(args) -> int:
         from mtt.cli.options import choice_from_args
+        from mtt.derivation.checking import identifiability_warnings
         from mtt.derivation.pipeline import load
 
         choice = choice_from_args(args)
@@ -118,7 +74,7 @@ def warn_on_compile(run):
             graph = load(args.file, choice.selection)
         except MttError:
             return run(args)  # compile reports the errors
-        for note in warnings(graph, choice):
+        for note in identifiability_warnings(graph, choice):
             print(note.render(), file=sys.stderr)
         return run(args)
 

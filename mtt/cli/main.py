@@ -68,68 +68,29 @@ class _Parser(Parser):
 # check / show -----------------------------------------------------------------
 
 
-def _check_one(file: str, args) -> tuple[dict, ModelError | None, BondGraph | None, list]:
-    """Everything that can be told of a model before algebra: the language's rules, then
-    causality and the structure (can the input reach the output, the unknowns matter);
-    with --identifiability, whether the data can determine the unknowns (a warning)."""
-    from mtt.derivation.causality import assign
-    from mtt.derivation.structure import causal_for
-    from mtt.language.bondgraph import build
-    from mtt.language.parse import parse
-    from mtt.language.subsystems import read_source
-    from mtt.present.summary import check_record
-
-    parsed = graph = problem = None
-    notes = []
-    try:
-        parsed = parse(read_source(file))
-        graph = build(parsed, selection_from_args(args), part=True)
-        if graph.open_ports:  # a part: its own rules and causality (its ports' is free)
-            assign(graph)
-        else:
-            causal_for(graph, identify=True)
-        if args.identifiability and not graph.open_ports:  # algebra: sympy and G(s)
-            notes = identify.warnings(graph, choice_from_args(args))
-    except ModelError as exc:
-        problem = exc
-    record = check_record(file, parsed, graph, problem)
-    record["warnings"] += [note.to_json() for note in notes]
-    return record, problem, graph, notes
-
-
 def cmd_check(args) -> int:
+    from mtt.derivation.checking import check
+    from mtt.present.summary import check_record, check_text
+
+    choice = choice_from_args(args) if args.identifiability else None
     status = EXIT_OK
     records = []
     for file in args.files:
-        record, problem, graph, notes = _check_one(file, args)
-        if problem is not None:
+        checked = check(file, selection_from_args(args), choice)
+        record = check_record(checked)
+        if checked.problem is not None:
             status = EXIT_MODEL_ERROR
         if args.json:
             records.append(record)
             continue
-        for note in (*(graph.warnings if graph else ()), *notes):
+        for note in (*(checked.graph.warnings if checked.graph else ()), *checked.notes):
             print(note.render(), file=sys.stderr)
-        if problem is not None:
-            print(problem.render(), file=sys.stderr)
-            count = len(problem.errors)
+        if checked.problem is not None:
+            print(checked.problem.render(), file=sys.stderr)
+            count = len(checked.problem.errors)
             print(f"{file}: {count} error{'s' * (count != 1)}", file=sys.stderr)
             continue
-        unknowns = graph.unknowns
-        unknown = f", unknown{'s' * (len(unknowns) > 1)} {', '.join(unknowns)}" if unknowns else ""
-        from mtt.present.summary import signals_text
-
-        several = lambda names: "s" * (len(names) > 1)  # noqa: E731
-        ends = (
-            f"input{several(graph.inputs)} {signals_text(graph, graph.inputs)}, "
-            f"output{several(graph.outputs)} {signals_text(graph, graph.outputs)}"
-        )
-        if graph.open_ports:
-            ends = f"ports {', '.join(graph.open_ports)}"
-        kind = "part" if graph.open_ports else "model"
-        print(
-            f"{file}: ok: {kind} {graph.name}, {record['components']} components, "
-            f"{record['bonds']} bonds, {ends}{unknown}"
-        )
+        print(check_text(checked.graph, record))
     if args.json:  # one document, of one shape for one file or several
         _print_json({"ok": all(r["ok"] for r in records), "files": records})
     return status

@@ -1,4 +1,5 @@
-"""A model at a glance: `mtt show`'s summary and `mtt check --json`'s record of a file."""
+"""A model at a glance: `mtt show`'s summary, and `mtt check`'s line and `--json` record of
+a file."""
 
 from __future__ import annotations
 
@@ -8,9 +9,8 @@ from mtt.language.bondgraph import summary_counts
 from mtt.present.tables import rows as rows_text
 
 if TYPE_CHECKING:
+    from mtt.derivation.checking import Checked
     from mtt.language.bondgraph import BondGraph
-    from mtt.language.diagnostics import ModelError
-    from mtt.language.parse import ParsedModel
 
 
 def _argument(component) -> str:
@@ -21,10 +21,9 @@ def _argument(component) -> str:
     return "" if component.argument is None else str(component.argument.value)
 
 
-def check_record(
-    file: str, parsed: ParsedModel | None, graph: BondGraph | None, problem: ModelError | None
-) -> dict:
+def check_record(checked: Checked) -> dict:
     """The `check --json` record of one file (its shape is a public contract)."""
+    file, parsed, graph, problem = checked.file, checked.parsed, checked.graph, checked.problem
     errors = problem.errors if problem else ()
     warnings = (problem.warnings if problem else ()) + (graph.warnings if graph else ())
     record = {
@@ -54,7 +53,26 @@ def check_record(
         record["output"] = ",".join(graph.component(n).label for n in graph.outputs) or None
         record["ports"] = list(graph.open_ports)  # a part's own, checked alone
         record["unknown"] = list(graph.unknowns)
+    record["warnings"] += [note.to_json() for note in checked.notes]
     return record
+
+
+def check_text(graph: BondGraph, record: dict) -> str:
+    """`mtt check`'s line for a valid file: what it is, its size, its ends and unknowns."""
+    unknowns = graph.unknowns
+    unknown = f", unknown{'s' * (len(unknowns) > 1)} {', '.join(unknowns)}" if unknowns else ""
+    several = lambda names: "s" * (len(names) > 1)  # noqa: E731
+    ends = (
+        f"input{several(graph.inputs)} {signals_text(graph, graph.inputs)}, "
+        f"output{several(graph.outputs)} {signals_text(graph, graph.outputs)}"
+    )
+    if graph.open_ports:
+        ends = f"ports {', '.join(graph.open_ports)}"
+    kind = "part" if graph.open_ports else "model"
+    return (
+        f"{record['file']}: ok: {kind} {graph.name}, {record['components']} components, "
+        f"{record['bonds']} bonds, {ends}{unknown}"
+    )
 
 
 def signals_text(graph: BondGraph, names: tuple[str, ...]) -> str:
