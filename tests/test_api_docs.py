@@ -8,6 +8,7 @@ from pathlib import Path
 import pytest
 
 import mtt
+import mtt.api.experiments
 import mtt.api.loading
 import mtt.api.matrix
 import mtt.api.model
@@ -17,7 +18,7 @@ ROOT = Path(__file__).resolve().parent.parent
 OPTIONS = doctest.ELLIPSIS | doctest.NORMALIZE_WHITESPACE
 
 
-MODULES = [mtt, mtt.api.loading, mtt.api.matrix, mtt.api.model, mtt.api.results]
+MODULES = [mtt, mtt.api.experiments, mtt.api.loading, mtt.api.matrix, mtt.api.model, mtt.api.results]
 
 
 @pytest.mark.parametrize("module", MODULES, ids=lambda m: m.__name__)

@@ -105,5 +105,5 @@ def test_the_api_reads_a_record_through_mtt_data(tmp_path):
     assert record.y.tolist() == [0, 0.25, 0.5] and record.note == f"3 samples from {path}"
     with pytest.raises(mtt.MttError, match="no column 't'") as caught:
         model.read_csv(path)
-    assert caught.value.kind == "bad_argument" and caught.value.file == str(path)
+    assert caught.value.kind == "bad_data" and caught.value.file == str(path)  # as the CLI's
     assert caught.value.line == 1  # the header's line

@@ -126,3 +126,29 @@ def test_the_command_line_refuses_what_it_does_not_do_with_several_signals(capsy
     assert main(["fit", LOAD, *both, *flag]) == 2
     assert flag[0] in capsys.readouterr().err
     assert not list(tmp_path.glob("*.png")) and not (tmp_path / "fit.csv").exists()
+
+
+def test_the_api_and_the_command_line_read_several_signals_alike(capsys, tmp_path):
+    """Model.read_csv reads a column per signal through mtt.data, as `mtt fit` does, and a
+    missing column is the same located bad_data error in both (its file and line)."""
+    from mtt.cli.main import main
+
+    t, U, Y = record(motor(), 10.0, 2, seed=3, span=5.0)
+    path = tmp_path / "rig.csv"
+    header = "t,Se:v,Se:tl,Df:speed,Df:current"
+    np.savetxt(path, np.column_stack([t, U, Y]), delimiter=",", header=header, comments="")
+    found = motor().read_csv(path)
+    assert found.u.shape == (t.size, 2) and found.y.shape == (t.size, 2)
+    assert np.allclose(found.u, U) and found.note == f"{t.size} samples from {path}"
+    renamed = motor().read_csv(path, columns=header.split(","))
+    assert np.array_equal(renamed.y, found.y)
+    with pytest.raises(mtt.MttError, match="no column 'v'") as caught:
+        motor().read_csv(path, columns="t,v,tl,w,i")
+    assert (caught.value.kind, caught.value.file, caught.value.line) == ("bad_data", str(path), 1)
+    with pytest.raises(mtt.MttError, match="columns takes 5 different names"):
+        motor().read_csv(path, columns="t,v")
+    both = ["--input", "Se:v,Se:tl", "--output", "Df:speed,Df:current", "--data", str(path)]
+    assert main(["fit", LOAD, *both, "--columns", "t,v,tl,w,i", "--json"]) == 2
+    (error,) = json.loads(capsys.readouterr().out)["errors"]
+    assert (error["kind"], error["file"], error["line"]) == ("bad_data", str(path), 1)
+    assert "no column 'v'" in error["message"] and "--columns" in error["message"]

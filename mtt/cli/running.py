@@ -14,7 +14,7 @@ import sys
 import warnings
 from collections.abc import Callable
 
-from mtt.data import DataError
+from mtt.data import DataError, located
 from mtt.estimator.advice import for_command_line
 
 EXIT_OK, EXIT_STOPPED, EXIT_USAGE = 0, 1, 2
@@ -47,15 +47,12 @@ def guarded(action: Callable[[argparse.Namespace], int]) -> Callable[[argparse.N
                 if not _handled(warning.category):
                     say(f"mtt {args.command}: warning: {warning.message}", stderr=True)
             return status
-        except DataError as exc:
-            message = as_options(exc)
-            if exc.path is not None:  # a data file's content: its file and line
-                where = {"file": exc.path, "kind": "bad_data", "line": exc.line}
-        except (UsageError, ValueError) as exc:
-            message = str(exc)
-            if getattr(exc, "path", None) is not None:  # a module's CSVError, or as one
-                kind = getattr(exc, "kind", "bad_data")
-                where = {"file": exc.path, "kind": kind, "line": exc.line}
+        except (UsageError, ValueError) as exc:  # a DataError's names as options
+            message = as_options(exc) if isinstance(exc, DataError) else str(exc)
+            place = located(exc)  # a data file's content (or a module's CSVError): where
+            if place is not None:
+                kind, file, line = place
+                where = {"file": file, "kind": kind, "line": line}
         except BrokenPipeError:  # stdout closed by its reader: main's business, not an error
             raise
         except OSError as exc:

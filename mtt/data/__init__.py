@@ -25,3 +25,13 @@ def default_hold(signal: str | None, measured: bool) -> str:
     """zoh for a test signal that is held by construction (the fit of a simulated PRBS must
     not read its jumps as ramps), linear for measured data and an input read from a file."""
     return "zoh" if not measured and (signal or "step") in HELD_SIGNALS else "linear"
+
+
+def located(error: Exception) -> tuple[str, str, int | None] | None:
+    """(kind, file, line) of a data file's problem, as --json and the API's MttError report
+    it: a DataError at a file, or a generated module's CSVError ("bad_data", or its own
+    kind: "io" when the file cannot be read at all); None for any other error."""
+    path = getattr(error, "path", None)
+    if path is None:
+        return None
+    return getattr(error, "kind", "bad_data"), path, getattr(error, "line", None)

@@ -1,7 +1,10 @@
 """A fit as people read it: each unknown's estimate with its standard error and 95 %
-interval, the fit, the method, the local minima of the criterion and the noise model."""
+interval, the fit, the method, the local minima of the criterion and the noise model (with
+several inputs or outputs: each output's fit and noise)."""
 
 from __future__ import annotations
+
+import math
 
 import numpy as np
 
@@ -128,3 +131,42 @@ def validation_lines(compared) -> list[str]:
 def validation_label(name: str, comparison) -> str:
     """A held-out record's title in the compare plot."""
     return f"validation, fit {comparison.fit_percent:.4g} %: {name}"
+
+
+def _finite(value: float) -> float | None:
+    return float(value) if math.isfinite(value) else None
+
+
+def signals_fit_record(module, result, sources) -> dict:
+    """`mtt fit --json` with several inputs or outputs: each unknown, each output's noise
+    and fit, the records' `sources`."""
+    k, se = np.atleast_1d(result.k), np.atleast_1d(result.k_se)
+    return {
+        "model": module.MODEL, "inputs": list(module.INPUTS), "outputs": list(module.OUTPUTS),
+        "data": list(sources), "ok": bool(result.ok), "warnings": list(result.warnings),
+        "unknowns": {name: {"k": _finite(value), "k_se": _finite(error)}
+                     for name, value, error in zip(module.UNKNOWNS, k, se, strict=True)},
+        "signals": {name: {"noise": noise.record(), "fit_percent": _finite(fit),
+                           "residual_rms": _finite(rms)}
+                    for name, noise, fit, rms in zip(module.OUTPUTS, result.noise,
+                                                     result.fit_percent, result.residual_rms,
+                                                     strict=True)},
+    }  # fmt: skip
+
+
+def signals_fit_text(module, result, samples: int, sources) -> str:
+    """`mtt fit` with several inputs or outputs: the estimates, then each output's fit and
+    noise (`samples` in all, read from `sources`)."""
+    lines = [
+        f"{module.MODEL}: from {', '.join(module.INPUTS)} to {', '.join(module.OUTPUTS)}; "
+        f"{samples} samples from {', '.join(sources)}"
+    ]
+    k, se = np.atleast_1d(result.k), np.atleast_1d(result.k_se)
+    for name, value, error in zip(module.UNKNOWNS, k, se, strict=True):
+        lines.append(f"  {name} = {value:.6g} +- {error:.3g} (95 % interval "
+                     f"{value - 1.96 * error:.6g} to {value + 1.96 * error:.6g})")  # fmt: skip
+    for name, noise, fit in zip(module.OUTPUTS, result.noise, result.fit_percent, strict=True):
+        lines.append(f"  {name}: fit {fit:.4g} %, noise {noise.kind}, std {noise.std:.3g}")
+    if not result.ok:
+        lines.append("  not ok: " + result.warnings[0])
+    return "\n".join(lines)
