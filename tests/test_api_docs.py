@@ -18,7 +18,14 @@ ROOT = Path(__file__).resolve().parent.parent
 OPTIONS = doctest.ELLIPSIS | doctest.NORMALIZE_WHITESPACE
 
 
-MODULES = [mtt, mtt.api.experiments, mtt.api.loading, mtt.api.matrix, mtt.api.model, mtt.api.results]
+MODULES = [
+    mtt,
+    mtt.api.experiments,
+    mtt.api.loading,
+    mtt.api.matrix,
+    mtt.api.model,
+    mtt.api.results,
+]
 
 
 @pytest.mark.parametrize("module", MODULES, ids=lambda m: m.__name__)
