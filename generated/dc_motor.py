@@ -4092,6 +4092,10 @@ def _check_sizes(shapes, offset: bool, initial_state: bool) -> None:
             )
 
 
+KEPT_ANSWERS = 6  # `Records.prediction`'s answers kept (a descent from a second start asks
+# for a few points before the fit asks again at the first one's end)
+
+
 class Records:
     """The records of a fit, held in this process: `fit_records` asks them only for sums
     (moments, validation sums) and their shapes, so that records held elsewhere (by worker
@@ -4131,12 +4135,14 @@ class Records:
     def prediction(self, Theta, k, filters, settings, jacobian: bool, keep: bool = False) -> list:
         """Each record's exact prediction errors at k with the noise model's filters (ar, ma)
         (`_record_prediction`); keep=True also their signals (dropped by records held
-        elsewhere: only sums travel). The last few answers are kept: the fit asks again at
-        its estimate."""
+        elsewhere: only sums travel). The last few answers asked for are kept: the fit asks
+        again at its estimate."""
         noise = NoiseModel(*(np.asarray(f, dtype=float) for f in filters))
         key = (_settings_key(k, settings), noise.ar.tobytes(), noise.ma.tobytes(), jacobian, keep)
-        if key not in self._kept:
-            if len(self._kept) >= 4:
+        if key in self._kept:  # (the least recently asked answer goes first)
+            self._kept[key] = self._kept.pop(key)
+        else:
+            if len(self._kept) >= KEPT_ANSWERS:
                 self._kept.pop(next(iter(self._kept)))
             self._kept[key] = [_record_prediction(Theta, record, k, noise, settings, jacobian, keep)
                                for record in self.records]  # fmt: skip
@@ -4658,6 +4664,9 @@ def _share_text(fraction: float) -> str:
 # The exact fit's driver: its starts, its noise model and its summary ----------------------------
 
 SAME_END = 1e-6  # two ends of the descent this close (relative) are one minimum
+FAR_MINIMUM = 100.0  # another local minimum of the least-squares cost this many times the
+# global minimum's value is not a start: that cost differs from the exact prediction error
+# by the interpolation's O(dt^2) error and the noise's bias, small beside its own minimum
 
 
 def _distinct(points: list, point) -> bool:
@@ -4670,10 +4679,19 @@ def _distinct(points: list, point) -> bool:
 
 def _starts(k_ls, coefficients, bounds, found, k0) -> list:
     """(label, point) of each start of the exact descent: the polynomial cost's global
-    minimiser, its other local minima within the bounds, and k0; each once, finite."""
+    minimiser, its other local minima within the bounds that fit nearly as well (their cost
+    under FAR_MINIMUM times the global minimum's), and k0; each once, finite."""
     starts = [("the least-squares estimate", k_ls)]
+    minima = _fit_minima(coefficients, bounds, found)
+    if SCALAR:
+        values = _value(coefficients, minima) if minima.size else np.zeros(0)
+        lowest = float(_value(coefficients, np.float64(k_ls))) if np.isfinite(k_ls) else math.inf
+    else:
+        values = found.values if found is not None else np.zeros(0)
+        lowest = float(values[0]) if len(values) else math.inf
     starts += [("a local minimum of the least-squares cost", point)
-               for point in _fit_minima(coefficients, bounds, found)]  # fmt: skip
+               for point, value in zip(minima, values, strict=True)
+               if not value > FAR_MINIMUM * max(lowest, 0.0)]  # fmt: skip
     if k0 is not None:
         starts.append(("k0", k0))
     chosen, points = [], []
