@@ -96,3 +96,30 @@ def test_model_fit_of_a_nonlinear_model_starts_from_the_small_signal_estimate():
     assert "record 1: initial state q_upper = " in text and f"a1 = {found.k[0]:.6g} ± " in text
     with pytest.raises(mtt.MttError, match="C is an option of a linear model's fit"):
         model.fit(t, u, clean, C="(1+s)^3")
+
+
+def test_many_records_of_a_nonlinear_model_go_through_mtt_batch(tmp_path):
+    import mtt.batch
+
+    model, paths, records = mtt.load(MODEL), [], []
+    for seed in (4, 5, 6):
+        t, u, clean, _ = _record(seed)
+        records.append((t, u, noisy(clean, 20, seed=seed)))
+        paths.append(_write(tmp_path / f"r{seed}.csv", *records[-1]))
+    record = model.read_csv(paths[0])  # by the simulator (not the small-signal estimator)
+    np.testing.assert_array_equal(record.y, records[0][2])
+    batch = mtt.batch.fit_many(model, str(tmp_path / "r*.csv"), jobs=1, hold="zoh", multistart=0)
+    assert batch.ok and len(batch) == 3
+    for outcome in batch:
+        k, k_se = outcome.result.k, outcome.result.k_se
+        assert np.all(np.abs(k - TRUE) < 3 * k_se), outcome.name
+    assert "prediction error with the nonlinear model" in batch.table()
+    pooled = mtt.batch.fit_many(model, paths[:2], jobs=1, pooled=True, hold="zoh", multistart=0,
+                                validate=paths[2])  # fmt: skip
+    joint = model.simulator().fit(*map(list, zip(*records[:2], strict=True)), hold="zoh",
+                                  multistart=0)  # fmt: skip
+    np.testing.assert_array_equal(pooled.pooled.k, joint.k)  # the records fitted jointly
+    assert pooled.pooled.ok and len(pooled.pooled.states) == 2
+    assert pooled.validation[0].comparison.fit_percent > 85
+    with pytest.raises(mtt.MttError, match="unexpected parameter 'bogus'"):
+        mtt.batch.fit_many(model, paths, jobs=1, bogus=1.0)

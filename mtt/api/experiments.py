@@ -53,10 +53,11 @@ class Experiments:
     def read_csv(self, path: str | Path, *, columns=None) -> Record:
         """A measured record (mtt.data): the columns `columns` (time, input, output, "T,U,Y"
         or three names; default t,u,y) of a CSV file, comma-, semicolon- or tab-separated,
-        its times increasing strictly; `record.t`, `.u`, `.y` go to `fit` and `estimate`.
-        With several inputs or outputs: the time and every signal (default their labels,
-        t,Se:v,...,Df:w), `u` and `y` with a column per signal, as `fit` takes them."""
-        module = self._estimator
+        its times increasing strictly; `record.t`, `.u`, `.y` go to `fit` and `estimate`
+        (a nonlinear model's read by its simulator). With several inputs or outputs: the
+        time and every signal (default their labels, t,Se:v,...,Df:w), `u` and `y` with a
+        column per signal, as `fit` takes them."""
+        module = self._simulator if self._simulates else self._estimator
         try:
             if self.bondgraph.several:
                 names = signals.signal_columns(module, columns)

@@ -136,7 +136,7 @@ def estimator(model) -> Estimator:
     generated module imported from its file."""
     from mtt.api.loading import load
     from mtt.api.model import Model
-    from mtt.estimator import codegen
+    from mtt.estimator import codegen, nonlinear_codegen
 
     if isinstance(model, Estimator):
         return model
@@ -144,10 +144,14 @@ def estimator(model) -> Estimator:
         return from_source(files.source_text(model, "a generated module", files.MAX_MODULE_BYTES))
     if isinstance(model, str | Path):
         model = load(model)
-    if isinstance(model, Model):
+    if isinstance(model, Model) and model.nonlinear and model.choice.at is None:
+        system, values = model._system  # a nonlinear model: its simulator's prediction error
+        source = nonlinear_codegen.render(system, values=values, description=model.description)
+        module = model.simulator()
+    elif isinstance(model, Model):
         source = codegen.render(model._checked_theta())
         module = model.estimator()
-    elif isinstance(model, ModuleType) and hasattr(model, "fit_records"):
+    elif isinstance(model, ModuleType) and hasattr(model, "fit"):
         path = getattr(model, "__file__", None)
         if not path or not Path(path).is_file():
             raise MttError(
@@ -309,6 +313,10 @@ def fit_many(model, records, *, executor=None, jobs: int | None = None, pooled: 
     found = estimator(model)
     pooled_fits.check_options(found.module, fit_options)
     held_out = validation.held_out(found.module, records_of(validate or ()), columns)
+    if pooled and not hasattr(found.module, "fit_records"):  # a nonlinear model's simulator
+        batch = _joint(found, records, columns, fit_options)
+        return replace(batch, validation=validation.compared(batch.pooled, held_out),
+                       module=found.module)  # fmt: skip
     if pooled:
         batch = _pooled(found, records, executor, jobs, columns, chunk_size, progress,
                         fit_options)  # fmt: skip
@@ -366,5 +374,25 @@ def _pooled(found: Estimator, records, executor, jobs, columns, chunk_size, prog
         pool.close()
     outcomes = tuple(
         Outcome(name, None, steps.errors.get(position)) for position, (name, _) in enumerate(specs)
+    )
+    return Batch(outcomes, result)
+
+
+def _joint(found: Estimator, records, columns, options) -> Batch:
+    """A nonlinear model's records pooled: read here and fitted jointly by its simulator's
+    `fit` (the unknowns common, each record's initial state and offset its own), since its
+    prediction errors do not sum from parts as the linear fit's moments do."""
+    specs, read, errors = list(records_of(records)), [], {}
+    for position, (_, spec) in enumerate(specs):
+        try:
+            read.append(worker.read(found.module, spec, tuple(columns)))
+        except (OSError, ValueError) as error:
+            errors[position] = worker.message(error)
+    result = None
+    if read:
+        with worker.one_thread():
+            result = found.module.fit(*map(list, zip(*read, strict=True)), **options)
+    outcomes = tuple(
+        Outcome(name, None, errors.get(position)) for position, (name, _) in enumerate(specs)
     )
     return Batch(outcomes, result)

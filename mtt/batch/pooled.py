@@ -6,6 +6,7 @@ step of the fit is one round trip of small matrices; the steps themselves are th
 
 from __future__ import annotations
 
+import inspect
 from typing import TYPE_CHECKING
 
 from mtt.batch import run, worker
@@ -26,8 +27,15 @@ class _NoRecords:
 
 def check_options(module, options: dict) -> None:
     """The module's own checks of fit's options, once, before any record is sent: fit_records
-    checks them before it asks the records anything."""
+    checks them before it asks the records anything (a nonlinear model's simulator has
+    none: its fit's signature checks their names, each record's fit their values)."""
     try:
+        if not hasattr(module, "fit_records"):
+            signature = inspect.signature(module.fit)
+            signature.bind(None, None, None, **options)
+            module._known_values({name: value for name, value in options.items()
+                                  if name not in signature.parameters})  # fmt: skip
+            return
         module.fit_records(_NoRecords(), **options)
     except _OptionsChecked:
         return

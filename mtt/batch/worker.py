@@ -119,7 +119,7 @@ def _parquet(path: str, columns):
     return arrays
 
 
-def _message(error: BaseException) -> str:
+def message(error: BaseException) -> str:
     if isinstance(error, ValueError | OSError):
         if isinstance(error, OSError) and error.filename:
             return f"{error.filename}: {error.strerror}"
@@ -136,7 +136,7 @@ def _each(module, chunk, columns, work):
         try:
             value, error = work(module, *read(module, spec, columns)), None
         except Exception as caught:  # one record's failure is its own, the others go on
-            value, error = None, _message(caught)
+            value, error = None, message(caught)
         out.append((position, value, error, time.process_time() - start))
     return out
 
@@ -185,7 +185,7 @@ class Loaded:
                 shape = module.replace(module.Shape.of(record[0], record[1]), label=label)
                 module._check_sizes([shape], offset, initial_state)
             except Exception as caught:
-                self.errors.append((position, _message(caught)))
+                self.errors.append((position, message(caught)))
                 continue
             self.records.append(record)
             self.positions.append(position)

@@ -11,6 +11,8 @@ import numpy as np
 from mtt.present import tables
 from mtt.present.fits import METHOD_NAMES, fit_text, validation_lines
 
+NONLINEAR = {"pem": "prediction error with the nonlinear model"}  # a simulator's fit
+
 
 def named(outcome) -> str:
     """A record's error message, starting with its name."""
@@ -49,7 +51,8 @@ def table(
     printed apart: `named`). `method`: the fits' (by default read from their results)."""
     methods = {getattr(o.result, "method", None) for o in batch if o.result is not None}
     methods = sorted(methods - {None}) if method is None else [method]
-    method = ", ".join(METHOD_NAMES.get(m, str(m)) for m in methods)
+    names = METHOD_NAMES if hasattr(module, "fit_records") else NONLINEAR  # (a simulator's)
+    method = ", ".join(names.get(m, str(m)) for m in methods)
     if len(module.UNKNOWNS) == 1:
         estimates = (module.UNKNOWN, "k_se")
     else:
