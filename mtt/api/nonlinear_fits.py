@@ -67,17 +67,15 @@ def linearised_start(model: Model, t, u, y, *, hold: str = "linear") -> Start:
     return Start(np.atleast_1d(np.asarray(k, dtype=float)), f"the small-signal model at {shown}")
 
 
-LINEAR = dict(
-    method="pem", noise="auto", C="auto", beta=0.0
-)  # Model.fit's options of a linear model
+LINEAR = dict(method="pem", C="auto", beta=0.0)  # Model.fit's options of a linear model only
 
 
 def fit(model: Model, t, u, y, *, k0=None, starts=(), linearised: bool = True,
         hold: str = "linear", **options):  # fmt: skip
-    """The simulator's `fit` (its options: starts, multistart, shooting, segments, profile,
-    x0...), its starts led by the small-signal model's estimate (`linearised`); the Fit as
-    `Model.fit` gives it. The options of a linear model's fit (method, noise, C, beta) are
-    refused unless at their defaults."""
+    """The simulator's `fit` (its options: noise, starts, multistart, shooting, segments,
+    profile, x0...), its starts led by the small-signal model's estimate (`linearised`); the
+    Fit as `Model.fit` gives it. The options of a linear model's fit only (method, C, beta)
+    are refused unless at their defaults."""
     from mtt.api.fits import Fit, delegate
 
     for name, default in LINEAR.items():

@@ -32,8 +32,8 @@ def _filter(args):
 
 def nonlinear_options(module, args) -> dict:
     """The options of a nonlinear model's fit (mtt.api.nonlinear_fits.fit): those of the
-    linear fit that apply, --shooting and --multistart; --method, --noise, --filter and
-    --beta (linear options) are refused there unless at their defaults."""
+    linear fit that apply (--noise among them), --shooting and --multistart; --method,
+    --filter and --beta (linear options) are refused there unless at their defaults."""
     found = dict(
         k0=None if args.k0 is None else unknowns.point(module, args.k0, "--k0"),
         bounds=unknowns.bounds(module, args.bounds), offset=args.offset,
