@@ -18,6 +18,7 @@ from mtt.cli.options import (
     named_values,
     numbers,
     starts,
+    state_values,
     words,
 )
 from mtt.data import DEFAULT_DT, DEFAULT_SEED, DEFAULT_T_END
@@ -183,6 +184,14 @@ def register(commands) -> None:
     simulate.add_argument("file", metavar="FILE")
     add_parameter_options(simulate)
     _data_options(simulate, measured=False)
+    simulate.add_argument(
+        "--x0",
+        type=state_values,
+        metavar="V,...|NAME=V,...",
+        help="a nonlinear model's initial state (without --at): a value per state in the "
+        "order `mtt ss` lists them (--x0 1000,800), or by name (--x0 q_upper=1000; a state "
+        "not named starts at 0); default rest, x = 0",
+    )
     simulate.add_argument("--csv", type=given, metavar="FILE", help="write the samples (t,u,y)")
     simulate.add_argument(
         "--json", action="store_true", help="print the samples as JSON arrays t, u, y"

@@ -316,6 +316,12 @@ def named_values(text: str) -> Named:
     return _by_name(text, _finite) if "=" in text else _finite(text, text)
 
 
+def state_values(text: str) -> dict[str, float] | list[float]:
+    """The type of simulate's --x0: `q1=1,q2=2` by name, or bare numbers in the order of
+    the model's states (`1,2`)."""
+    return _by_name(text, _finite) if "=" in text else numbers(text)
+
+
 def numbers(text: str) -> list[float]:
     """A list option's word: finite numbers separated by commas (`1,5,10`); the option
     (action `Flatten`) extends its list with them: `1,5 10` and `1 5 10` say the same."""

@@ -190,11 +190,14 @@ def simulate(
     noise_uniform: float | None = None,
     noise_snr: float | None = None,
     seed: int | None = None,
+    x0: np.ndarray | None = None,
 ) -> Record:
     """A simulated record: the model's output at the unknowns' values k for the input u
-    (`source` describes it), with noise uniform in [-noise_uniform, noise_uniform] or white
-    Gaussian at noise_snr dB."""
-    clean = module.simulate(t, u, k, hold=hold)
+    (`source` describes it), from rest or (a nonlinear model's simulator) from the state
+    x0, with noise uniform in [-noise_uniform, noise_uniform] or white Gaussian at
+    noise_snr dB."""
+    start = {} if x0 is None else {"x0": x0}
+    clean = module.simulate(t, u, k, hold=hold, **start)
     named = values.named(module, k, "g")
     bad = np.flatnonzero(~np.isfinite(clean))  # NaN or inf written as data, invalid JSON
     if bad.size:
@@ -206,6 +209,10 @@ def simulate(
         )
     seed = DEFAULT_SEED if seed is None else seed
     note = f"{t.size} samples simulated with {named}, input {source}"
+    if x0 is not None:
+        note += ", from x0 = " + ", ".join(
+            f"{name} = {v:g}" for name, v in zip(module.STATES, x0, strict=True)
+        )
     y = clean
     if noise_uniform:
         if not 0 <= noise_uniform <= module.MAX_SIGNAL / 100:
