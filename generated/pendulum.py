@@ -3029,31 +3029,38 @@ def _forced(real: _Realisation, t, u, hold: str) -> np.ndarray:
 
 
 def _free(real: _Realisation, t: np.ndarray, steps: "_Steps") -> np.ndarray:
-    """The free responses h Phi(t_i - t_0) e_j at the samples, a column per state j.
+    """The free responses h Phi(t_i - t_0) e_j at the samples, a column per state j."""
+    return _free_rows(real.F, real.h[None], t, steps, real.order)[:, 0]
 
-    Regular sampling: r_i = h Phi^i by blocks of L samples, r_(qL + j) = r_(qL) Phi^j, the
-    block starts following r_((q+1)L) = r_(qL) Phi^L (then below TINY: 0, where a fast
+
+def _free_rows(F: np.ndarray, H: np.ndarray, t: np.ndarray, steps: "_Steps", columns: int):
+    """The last `columns` columns of each row of H Phi(t_i - t_0) at the samples, (samples,
+    rows, columns), Phi(t) = e^(F t).
+
+    Regular sampling: R_i = H Phi^i by blocks of L samples, R_(qL + j) = R_(qL) Phi^j, the
+    block starts following R_((q+1)L) = R_(qL) Phi^L (then below TINY: 0, where a fast
     mode has died out), each block one product with the stacked powers Phi^0..Phi^(L-1)."""
-    order = real.order
-    Phi = linalg.expm(real.F * steps.values[:, None, None])
+    size, rows = F.shape[0], H.shape[0]
+    Phi = linalg.expm(F * steps.values[:, None, None])
     if steps.index is None:
         length = max(64, math.isqrt(t.size))
-        powers = np.empty((length + 1, order, order))
-        powers[0] = np.eye(order)
+        powers = np.empty((length + 1, size, size))
+        powers[0] = np.eye(size)
         for j in range(length):
             np.matmul(powers[j], Phi[0], out=powers[j + 1])
         count = -(-t.size // length)
-        starts = np.empty((count, order))
-        starts[0] = real.h
+        starts = np.empty((count, rows, size))
+        starts[0] = H
         for q in range(1, count):
             np.matmul(starts[q - 1], powers[length], out=starts[q])
         starts[np.abs(starts) < TINY] = 0.0  # (subnormal numbers are slow)
-        stacked = powers[:length].transpose(1, 0, 2).reshape(order, length * order)
-        return (starts @ stacked).reshape(count * length, order)[: t.size]
-    quiet = np.zeros((order, t.size - 1, 1))
-    Gamma = np.zeros((len(Phi), order, 1, order))
-    states = _propagate(Phi, Gamma, quiet, np.eye(order), steps.index)  # (j, i, state)
-    return np.einsum("jir,r->ij", states, real.h)
+        stacked = powers[:length, :, size - columns :].transpose(1, 0, 2).reshape(size, -1)
+        out = (starts @ stacked).reshape(count, rows, length, columns).transpose(0, 2, 1, 3)
+        return out.reshape(count * length, rows, columns)[: t.size]
+    quiet = np.zeros((columns, t.size - 1, 1))
+    Gamma = np.zeros((len(Phi), columns, 1, size))
+    states = _propagate(Phi, Gamma, quiet, np.eye(size)[size - columns :], steps.index)
+    return np.einsum("lis,rs->irl", states, H)  # (start l, sample i, state s)
 
 
 def _nuisance_matrix(real: _Realisation, t, steps, offset: bool, initial_state: bool):
@@ -3087,14 +3094,35 @@ def _augmented(real: _Realisation, t, u, hold: str, z0) -> tuple[np.ndarray, np.
     is [dz/dk_1; ..; dz/dk_p; z], upper quasi-triangular as F is."""
     count, order = len(real.dd), real.order
     size = order * (1 + count)
-    F = linalg.block_diag(*[real.F] * (count + 1))
-    F[: count * order, count * order :] = real.dF.reshape(count * order, order)
+    F = _augmented_matrix(real)
     g = np.zeros(size)
     g[count * order :] = real.g
     start = np.zeros(size)
     start[count * order :] = z0
     rows = _state_rows(F, g, t, u, hold, start)
     return rows[count * order :], rows[: count * order].reshape(count, order, t.size)
+
+
+def _augmented_matrix(real: _Realisation) -> np.ndarray:
+    """The augmented system's matrix, [[F, .., 0, dF_1], .., [0, .., F, dF_p], [0, .., 0, F]]
+    for the state [dz/dk_1; ..; dz/dk_p; z]: upper quasi-triangular as F is."""
+    count, order = len(real.dd), real.order
+    F = linalg.block_diag(*[real.F] * (count + 1))
+    F[: count * order, count * order :] = real.dF.reshape(count * order, order)
+    return F
+
+
+def _free_slopes(real: _Realisation, t, steps) -> tuple[np.ndarray, np.ndarray]:
+    """The free responses h Phi(t_i - t_0) (samples, order) and their derivatives with
+    respect to the unknowns (samples, unknowns, order), from the augmented system: the row
+    [0, .., h, .., 0, dh_j] (h in the j-th place) times its Phi^i ends in d/dk_j (h Phi^i)."""
+    count, order = len(real.dd), real.order
+    H = np.zeros((count + 1, order * (count + 1)))
+    for j in range(count):
+        H[j, j * order : (j + 1) * order] = real.h
+    H[:, count * order :] = np.r_[real.dh, real.h[None]]
+    rows = _free_rows(_augmented_matrix(real), H, t, steps, order)
+    return rows[:, count], rows[:, :count]
 
 
 def _output_slopes(real: _Realisation, z, dz, u) -> np.ndarray:
@@ -3573,9 +3601,18 @@ def _record_prediction(Theta, record, k, noise: NoiseModel, settings, jacobian: 
     real = _realise(Theta, k)
     if real is None or not _predictor_stable(real):
         return _Prediction(math.inf, t.size, 0)
+    augmented = jacobian and real.order  # the output and its slopes from one recursion
     with np.errstate(all="ignore"):
-        forced = _forced(real, t, u, hold)
-        Xi = _nuisance_matrix(real, t, _Steps.of(t), offset, initial_state)
+        if augmented:
+            z, dz = _augmented(real, t, u, hold, np.zeros(real.order))
+            forced, slopes = real.h @ z + real.d * u, _output_slopes(real, z, dz, u)
+            Xi = _nuisance_matrix(real, t, None, offset, False)
+            if initial_state:
+                free, free_slopes = _free_slopes(real, t, _Steps.of(t))
+                Xi = np.concatenate([Xi, free], 1)
+        else:
+            forced = _forced(real, t, u, hold)
+            Xi = _nuisance_matrix(real, t, _Steps.of(t), offset, initial_state)
         white = noise.whiten(np.column_stack([y - forced, Xi]))
     if not np.isfinite(white).all():
         return _Prediction(math.inf, t.size, Xi.shape[1])
@@ -3591,7 +3628,12 @@ def _record_prediction(Theta, record, k, noise: NoiseModel, settings, jacobian: 
         return _Prediction(rss, t.size, projection.rank, offset=value, state=real.V @ z0,
                            fitted=fitted, residuals=y - fitted)  # fmt: skip
     with np.errstate(all="ignore"):
-        output, psi = _sensitivities(real, t, u, hold, z0)
+        if not augmented:
+            output, psi = _sensitivities(real, t, u, hold, z0)
+        elif initial_state:  # the free response's slopes with z0 held
+            output, psi = forced + Xi[:, int(offset) :] @ z0, slopes + free_slopes @ z0
+        else:
+            output, psi = forced, slopes
     fitted = output + value
     residuals = y - fitted
     na, nc = noise.orders
@@ -4390,13 +4432,15 @@ def _issued(result: Fit) -> Fit:
 #
 # Every method ends here with a _Summary of the records at its estimate. ok is False, with
 # the reason among the warnings, whenever a diagnostic contradicts the answer: the unknowns
-# not identifiable, a fit worse than the output's mean (fit % below 0), a point of lower
-# exact cost (the prediction error or, for "iv" and "ls", the output error with the
-# nuisances refitted) by more than MARGIN noise variances, a standard error larger than the
-# estimate, an unknown at its bound, or a record whose offset and initial state absorb so
-# much of the information about k that it is poorly determined.
+# not identifiable, a constant output, a fit worse than the output's mean (fit % below 0), a
+# point of lower exact cost (the prediction error or, for "iv" and "ls", the output error
+# with the nuisances refitted) by more than MARGIN noise variances, a standard error larger
+# than the estimate, an unknown at its bound, or a record whose offset and initial state
+# absorb so much of the information about k that it is poorly determined (or not at all:
+# RESOLVED).
 
 ABSORBED = 0.99  # the nuisances' share of the information about k beyond which it is named
+RESOLVED = 1e-10  # what they leave of it below this share is rounding: k and k_se mean nothing
 
 
 @dataclass(frozen=True)
@@ -4549,13 +4593,16 @@ def _verdict(Theta, records, shapes, k, summary: _Summary, *, found_, idle, nuis
     share = float(shares[which])
     se_which = float(np.reshape(k_se, -1)[which])
     value_which = float(np.reshape(k, -1)[which])
-    if nuisances and not idle and 0 < share < 1 - ABSORBED:
-        poor = not se_which <= POORLY_DETERMINED * abs(value_which)
+    if nuisances and not idle and 0 <= share < 1 - ABSORBED:
+        rounding = share < RESOLVED
+        poor = rounding or not se_which <= POORLY_DETERMINED * abs(value_which)
         (contradictions if poor else found_).append(
             f"the offset and initial state take {_share_text(1 - share)} of the information "
             f"about {UNKNOWNS[which]} (the input's response looks like theirs, as a step at the "
             "first sample does)"
-            + ("; what is left determines it poorly" if poor else "")
+            + ("; what is left is at the level of rounding: neither the estimate nor its standard "
+               "error means anything" if rounding else "; what is left determines it poorly" if poor
+               else "")
             + "; if the record starts at rest and without offset, fit with offset=False, "
             "initial_state=False"
         )
@@ -4577,10 +4624,10 @@ def _verdict(Theta, records, shapes, k, summary: _Summary, *, found_, idle, nuis
                 contradictions.append(text)
             elif not clean:
                 found_.append(text)
-    if not summary.deviations > 0:
-        found_.append(
+    if not summary.deviations > 0:  # (k and k_se then answer rounding error alone)
+        contradictions.append(
             "the output is constant: nothing in it responds to the input, so the estimate "
-            "means little and fit_percent (relative to the output's variation) is undefined "
+            "means nothing and fit_percent (relative to the output's variation) is undefined "
             "(NaN); check the output's column and the experiment"
         )
     elif fit_percent < 0:

@@ -119,15 +119,18 @@ def test_a_short_noisy_record_is_not_presented_as_a_precise_estimate(dc_drive):
     state absorb the slow dynamics and the steps end near k = 0 with a tiny k_se (it was
     reported without a warning); the model file's k = 10 fits better, and the fit says so.
     The exact fit finds where the prediction error is least, far away, and says that the
-    record determines k not at all: ok False."""
+    record determines k not at all: ok False (k_se beyond k, or what the nuisances leave of
+    the information about k at the level of rounding, where k_se is rounding too)."""
     t, u, y = prbs_record(dc_drive, 3.0, 10.0)
     fitted, texts = said(dc_drive, dc_drive.fit, t, u, y, hold="zoh", method="iv")
     assert not fitted.ok and abs(fitted.k) < 0.01 and fitted.k_se < 1e-3
     assert "the model file's value, k = 10, fits the data better" in texts[0]
     assert "standard errors from the estimate: the record determines" in texts[0]
     fitted, texts = said(dc_drive, dc_drive.fit, t, u, y, hold="zoh")
-    assert not fitted.ok and fitted.k_se > abs(fitted.k)
-    assert texts[0].startswith("k is poorly determined by these data")
+    assert not fitted.ok
+    assert (fitted.k_se > abs(fitted.k) and texts[0].startswith("k is poorly determined")) or (
+        fitted.absorbed > 1 - 1e-10 and "is at the level of rounding: neither" in texts[0]
+    )
     fitted, texts = said(dc_drive, dc_drive.fit, t, u, y, hold="zoh", method="ls")
     assert any("estimate: least squares is biased by output noise, or" in w for w in texts)
     t, u, y = prbs_record(dc_drive, 5.0, 10.0, seed=2)
@@ -187,13 +190,13 @@ def test_the_command_line_says_when_no_minimum_lies_within_the_bounds(capsys):
 
 def test_a_constant_output_is_a_warning_not_a_silent_nan(dc_drive):
     """The input varies, the output does not (a wrong column, a sensor off): fit_percent is
-    NaN, and the fit says why."""
+    NaN, and the fit says why: not ok (the estimate answers rounding error)."""
     t = np.arange(0.0, 100.0, 0.02)
     u = dc_drive.input_signal("prbs", t, period=1.0)
-    for method in ("iv", "ls"):
+    for method in ("pem", "iv", "ls"):
         fitted, texts = said(dc_drive, dc_drive.fit, t, u, np.ones_like(t), hold="zoh",
                              method=method)  # fmt: skip
-        assert np.isnan(fitted.fit_percent)
+        assert np.isnan(fitted.fit_percent) and not fitted.ok
         assert any(
             text.startswith("the output is constant: nothing in it responds") for text in texts
         )
