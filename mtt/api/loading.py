@@ -88,7 +88,7 @@ def load(
         `output` statements; several (a list, or "Se:v,Se:tl") for a transfer matrix.
     set: values replacing the file's, {name: number or exact expression text}.
     keep: parameters kept symbolic instead of substituted (names, or "a,b").
-    max_terms: the most terms a polynomial of the derivation may have (default 20000);
+    max_terms: the most terms a polynomial of the derivation may have (default 30000);
         beyond, deriving raises MttError too_large instead of growing without bound.
     at, branch: a nonlinear model's operating point ({"u": 3.2}, or states by name) and
         which steady state when there are several: its stages are then those of its

@@ -208,7 +208,7 @@ def add_parameter_options(parser: argparse.ArgumentParser) -> None:
         metavar="N",
         type=_positive,
         help="the most terms a polynomial of the derivation may have before it stops with "
-        "too_large (default 20000: symbolic results can grow exponentially)",
+        "too_large (default 30000: symbolic results can grow exponentially)",
     )
 
     group = parser.add_argument_group("operating point (nonlinear models)")

@@ -21,13 +21,14 @@ from mtt.derivation import deadline
 from mtt.language.bondgraph import BondGraph
 from mtt.language.diagnostics import ModelError, MttError, error
 
-# A polynomial of 20000 terms in some 20 variables takes some 20 MB as sympy's polynomial,
-# ten times that as a sympy expression, and a millisecond a term to write out as one and
-# as text: the result of a 10-section ladder with every parameter symbolic (17711 terms)
-# is printed within a minute.
-DEFAULT_MAX_TERMS = 20_000
+# A polynomial of 30000 terms in some 20 variables takes some 30 MB as sympy's polynomial,
+# ten times that as a sympy expression: a 10-section ladder with every parameter symbolic
+# (17711 terms in its result, 20295 in the largest polynomial on the way) derives and
+# prints within the default budget in some 20 s of processor time; 12 sections (121393
+# terms) are refused.
+DEFAULT_MAX_TERMS = 30_000
 # Products of two terms (each a dictionary update in sympy's sparse polynomials, about a
-# microsecond) allowed per term of the budget: 20000 terms allow 1e7, some 10-20 s.
+# microsecond) allowed per term of the budget: 30000 terms allow 1.5e7, some 15-30 s.
 WORK_PER_TERM = 500
 
 

@@ -13,6 +13,7 @@ from mtt.derivation.theta import Theta
 from mtt.derivation.transfer import LAPLACE
 from mtt.derivation.transfer_matrix import TransferMatrix
 from mtt.present import report
+from mtt.present.polynomials import factored, grouped, in_powers_of_s
 
 
 def _written(matrix: TransferMatrix) -> report.Written:
@@ -53,9 +54,9 @@ def _reduced(matrix: TransferMatrix, i: int, j: int, written: report.Written) ->
     if common is None:
         return None
     entry = matrix.entries[i][j]
-    num, den = (report.factored(written(p)) for p in (entry.numerator, entry.denominator))
+    num, den = (factored(written(p)) for p in (entry.numerator, entry.denominator))
     cancelled = sympy.factor(written(common))
-    return f"reduced: the factor {cancelled} cancels: G = {report.grouped(num)} / ({den})"
+    return f"reduced: the factor {cancelled} cancels: G = {grouped(num)} / ({den})"
 
 
 def matrix_text(matrix: TransferMatrix) -> str:
@@ -66,7 +67,7 @@ def matrix_text(matrix: TransferMatrix) -> str:
         "",
         f"  G(s) = B(s) / A(s): a {rows}x{columns} matrix of polynomials B over the common "
         "characteristic polynomial A",
-        f"  A (n = {matrix.n}):  {report.in_powers_of_s(written(matrix.A))}",
+        f"  A (n = {matrix.n}):  {in_powers_of_s(written(matrix.A))}",
         "",
     ]
     labels = list(_channels(matrix))
@@ -75,7 +76,7 @@ def matrix_text(matrix: TransferMatrix) -> str:
     for i, j, label in labels:
         b = matrix.B[i, j]
         degree = sympy.degree(b, LAPLACE) if b != 0 else 0
-        shown = report.in_powers_of_s(written(b))
+        shown = in_powers_of_s(written(b))
         lines.append(f"  {label + ':':{width}}  B (m = {degree}):  {shown}")
         note = _reduced(matrix, i, j, written)
         if note:

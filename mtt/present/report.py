@@ -12,35 +12,7 @@ from mtt.derivation.equations import INPUT, OUTPUT, Equations, signal_names
 from mtt.derivation.theta import Theta
 from mtt.derivation.transfer import LAPLACE
 from mtt.language.bondgraph import BondGraph
-
-
-def in_powers_of_s(expression: sympy.Expr) -> str:
-    """A polynomial in s written highest power first, each coefficient factored."""
-    poly = sympy.Poly(expression, LAPLACE)
-    terms = []
-    for (power,), coefficient in poly.terms():
-        c = factored(coefficient)  # each coefficient factored
-        monomial = {0: "", 1: "s"}.get(power, f"s**{power}")
-        if not monomial:
-            terms.append(str(c))
-        elif c == 1:
-            terms.append(monomial)
-        elif c == -1:
-            terms.append(f"-{monomial}")
-        else:
-            terms.append(f"{grouped(c)}*{monomial}")
-    return " + ".join(terms).replace("+ -", "- ") or "0"
-
-
-def factored(polynomial: sympy.Expr) -> sympy.Expr:
-    """The polynomial factored, when that is cheap: one of many terms or of huge numbers
-    (sympy's multivariate factoring looks for primes of their size) only has its common
-    factors taken out."""
-    numbers = polynomial.atoms(sympy.Rational)
-    digits = max((len(str(abs(r.p))) + len(str(r.q)) for r in numbers), default=0)
-    if digits > 40 or len(sympy.Add.make_args(sympy.expand(polynomial))) > 24:
-        return sympy.factor_terms(polynomial)
-    return sympy.factor(polynomial)
+from mtt.present.polynomials import factored, grouped, in_powers_of_s
 
 
 def _read_as_symbol(name: str) -> bool:
@@ -147,11 +119,6 @@ def tf_text(theta: Theta) -> str:
         f"  G(s) = {grouped(factored(num))} / ({factored(den)})",
     ]
     return "\n".join(lines)
-
-
-def grouped(expression: sympy.Expr) -> str:
-    """The expression as text, in parentheses when it is a sum."""
-    return f"({expression})" if isinstance(expression, sympy.Add) else str(expression)
 
 
 def latex(expression: sympy.Basic) -> str:
