@@ -3786,7 +3786,8 @@ class Fit:
     and "ls", which assume white noise); states: per record, the fitted initial state in the
     coordinates of scipy.signal.tf2ss(*transfer_function(k)) ("pem"); exact_cost: half the
     sum of squared prediction errors at k ("pem"); absorbed: the largest share of the
-    information about an unknown that the offset and initial state take (0 without them).
+    information about an unknown that the offset and initial state take (0 without them);
+    offset_fitted: whether the offsets were estimated (then an offset of exactly 0 is one).
     """
 
     k: float
@@ -3814,6 +3815,7 @@ class Fit:
     states: tuple[np.ndarray, ...] = field(default=(), repr=False)
     exact_cost: float = field(default=math.nan, repr=False)
     absorbed: float = math.nan
+    offset_fitted: bool = field(default=False, repr=False)
 
     def cost(self, k):
         """The last step's criterion at k (scalar or array; several unknowns: points, the
@@ -3915,9 +3917,9 @@ def _filter_for(Theta: np.ndarray, k, step: float, span: float) -> np.ndarray:
         return filter_polynomial(T)
     except ValueError:
         raise ValueError(
-            f"C='auto': the record spans {span:.3g} time units with samples {step:.3g} apart, "
-            f"which puts the filter's time constant at {T:.3g}, out of floating-point range: "
-            "are the times in the model's unit (seconds)?"
+            f"the record spans {span:.3g} time units with samples {step:.3g} apart: are the "
+            "times in the model's unit (seconds)? At that scale the time constant of the "
+            "least-squares filter (C='auto' chooses it from them) is out of floating-point range"
         ) from None
 
 
@@ -4668,7 +4670,8 @@ def _verdict(Theta, records, shapes, k, summary: _Summary, *, found_, idle, nuis
         noise_std=math.sqrt(rss / dof) if dof > 0 else math.nan, offsets=summary.offsets,
         fitted=summary.fitted if keep else (), residuals=summary.residuals if keep else (),
         covariance=summary.covariance, noise=summary.noise, states=summary.states,
-        exact_cost=summary.exact_cost, absorbed=1.0 - share if nuisances else 0.0, **common,
+        exact_cost=summary.exact_cost, absorbed=1.0 - share if nuisances else 0.0,
+        offset_fitted=settings["offset"], **common,
     ))  # fmt: skip
 
 

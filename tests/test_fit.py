@@ -190,7 +190,11 @@ def test_bad_records_are_clear_errors(dc_drive):
         (([t, t], [u], [y, y]), r"u must be a list of 2 arrays"),
         (([t, t[:5]], [u, u], [y, y]), r"t\[1\], u\[1\], y\[1\] must have the same length"),
         ((t[:5], u[:5], y[:5]), r"5 samples: too few to determine k and 5 nuisance"),
-        ((t * 1e-300, u, y), r"C='auto': the record spans 2e-300 time units"),
+        (
+            (t * 1e-300, u, y),
+            r"^the record spans 2e-300 time units with samples 2e-302 apart: are "
+            r"the times in the model's unit \(seconds\)\?",
+        ),
     ]:
         with pytest.raises(ValueError, match=message):
             dc_drive.fit(*arguments)
@@ -383,3 +387,24 @@ def test_the_module_command_line_fails_in_json_as_mtt_fit_does(dc_drive, tmp_pat
     assert mtt_main(["fit", str(mtt.example("dc_drive")), "--data", missing, "--json"]) == 2
     (theirs,) = json.loads(capsys.readouterr().out)["errors"]
     assert theirs == error
+
+
+def test_the_report_shows_an_estimated_offset_even_when_it_is_exactly_zero(dc_drive):
+    """An estimated offset of exactly 0 (an offset column that the projection dropped, or a
+    record without one) is still an estimate, and the report says it; an offset that was not
+    estimated is not reported."""
+    from dataclasses import replace
+
+    from mtt.present.fits import fit_text
+
+    class Source:
+        note = "a record"
+
+    t, u, y = record(1, None, t_end=20.0)
+    fitted = quiet_fit(dc_drive, t, u, y)
+    assert fitted.offset_fitted
+    text = fit_text(dc_drive, [Source()], replace(fitted, offsets=(0.0,)))
+    assert "  output offset at rest: 0\n" in text + "\n"
+    fitted = quiet_fit(dc_drive, t, u, y, offset=False)
+    assert not fitted.offset_fitted
+    assert "output offset" not in fit_text(dc_drive, [Source()], fitted)

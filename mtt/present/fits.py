@@ -86,7 +86,7 @@ def fit_text(module, records, result) -> str:
     ]
     if result.noise is not None:
         lines.append(f"  noise model: {noise_text(result.noise)}")
-    if any(result.offsets):
+    if any(result.offsets) or getattr(result, "offset_fitted", False):  # (an estimated 0 too)
         lines.append("  output offset at rest: " + ", ".join(f"{v:.6g}" for v in result.offsets))
     return "\n".join(lines)
 
