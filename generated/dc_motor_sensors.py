@@ -3504,6 +3504,8 @@ PEM_ITERATIONS = 60  # Gauss-Newton steps at most from each start
 PEM_CONVERGED = 1e-10  # steps below this, relative: converged
 SETTLED_COST = 1e-6  # a Gauss-Newton step that would lower the cost by less than this many
 # noise variances (moving k by a thousandth of its standard error) is not taken: converged
+RESIDUAL_ROUNDING = 1e-10  # residuals below this share of the output's spread (RMS) are
+# rounding (noise-free data): a step that would gain only a millionth of it is not taken
 DAMPING = 1e-4  # the first Levenberg-Marquardt damping, relative to J^T J's diagonal
 GRAM_CONDITION = 1e8  # the nuisances' scaled Gram matrix factorised directly below this
 SAME_BASIN = 3.0  # a descent this many standard errors from a minimum found ends there
@@ -3708,12 +3710,16 @@ def _gauss_newton(Theta, records, k, noise: NoiseModel, bounds, settings, sample
     rss, gram, slope = at(point)
     if gram is None:
         return *unpack(point), rss, 0
+    k_, noise_ = unpack(point)  # (the answer just computed, kept by the records)
+    parts = records.prediction(Theta, k_, noise_.filters, settings, True, keep)
+    rounding = RESIDUAL_ROUNDING**2 * sum(part.deviations for part in parts)
     damping, iterations = DAMPING, 0
     while iterations < PEM_ITERATIONS:
         scale = np.sqrt(np.maximum(np.diag(gram), 1e-300))
         newton = np.linalg.lstsq(gram / np.outer(scale, scale), slope / scale, rcond=None)[0]
-        if float(newton @ (slope / scale)) <= SETTLED_COST * rss / samples:
-            break  # Gauss-Newton's own step would lower the cost by a negligible amount
+        if float(newton @ (slope / scale)) <= SETTLED_COST * max(rss, rounding) / samples:
+            break  # Gauss-Newton's own step would lower the cost by a negligible amount (or
+            # by rounding alone, on noise-free data, where the steps would wander for ever)
         iterations += 1
         while damping < 1e12:
             matrix = gram / np.outer(scale, scale) + damping * np.eye(len(point))
