@@ -10,7 +10,6 @@ import pytest
 import sympy
 
 import mtt
-from mtt.cli import views
 from mtt.cli.main import main
 from mtt.present import bode
 
@@ -143,7 +142,7 @@ def test_mtt_bode_of_a_zero_transfer_function_is_an_error_without_warnings(tmp_p
     status, out, err = run(capsys, "bode", str(mtt.example("rlc")), "--k", "0,1", "--json")
     assert status == 2 and json.loads(out)["errors"][0]["kind"] == "bad_value"
     assert err == "error[bad_value]: G(s) is zero at c = 0: there is no Bode diagram\n"
-    assert views._finite(np.array([[1.5, -np.inf, np.nan]])) == [[1.5, None, None]]
+    assert bode.json_lists(np.array([[1.5, -np.inf, np.nan]])) == [[1.5, None, None]]
 
 
 def _png_size(path) -> tuple[int, int]:

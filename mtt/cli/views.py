@@ -49,14 +49,6 @@ def _print_json(record: dict) -> None:
     print(json.dumps(record, allow_nan=False))
 
 
-def _finite(array) -> list:
-    """An array as JSON lists, null where a value is not finite (a zero of G(jw) exactly on
-    the grid is -inf dB): JSON has no infinities."""
-    import numpy as np
-
-    return np.where(np.isfinite(array), array, None).tolist()
-
-
 def _dpi(text: str) -> float:
     """--dpi, as the other commands that draw take it."""
     try:
@@ -133,83 +125,17 @@ def cmd_bode(args) -> int:
             + ("" if len(unknowns) == 1 else " with --unknown NAME, or --set NAME=VALUE"),
             kind="missing_value",
         )
-    labels = [_point_label(model, point) for point in points]
-    if model.bondgraph.several:
-        return _bode_matrix(args, model, points, labels)
-    systems = []
-    for point, (label, k) in zip(points, labels, strict=True):
-        num, den = model.transfer_function.at(**point)
-        if not num.any():  # no magnitude in dB, no phase (scipy warns and gives -inf)
-            at = f" at {label}" if unknowns else ""
-            raise MttError(f"G(s) is zero{at}: there is no Bode diagram", kind="bad_value")
-        systems.append((k if isinstance(k, float) else float("nan"), num, den))
-    try:
-        data = bode.bode(systems)
-    except ValueError as exc:
-        raise MttError(str(exc), kind="out_of_range") from None
+    found = bode.model_bode(model, points)
     if args.out:
-        title = f"{model.name}: Bode diagram from {model.input} to {model.output}"
-        figure = bode.figure(data, labels=[label for label, _ in labels], title=title)
-        _save(figure, args.out, args.dpi)
+        _save(found.figure(), args.out, args.dpi)
+    at = "; ".join(found.labels)
     if args.json:
-        _print_json(_bode_record(args, model, labels, data))
+        _print_json({"ok": True, "file": args.file, "out": args.out, **found.record()})
+    elif found.several:
+        rows, columns = model.transfer_matrix.shape
+        print(f"wrote {args.out}: {rows}x{columns} Bode diagrams of {model.name} at {at}")
     elif args.out:
-        print(
-            f"wrote {args.out}: Bode diagram of {model.name} at {'; '.join(lb for lb, _ in labels)}"
-        )
-    return EXIT_OK
-
-
-def _point_label(model, point: dict) -> tuple[str, object]:
-    """A point's label (`k = 5`, `ra = 1, jl = 10`; the model's name without unknown) and
-    its unknowns' values for --json (a number for one, a list for several, else null)."""
-    values = {name: float(point.get(name, model.parameters[name])) for name in model.unknowns}
-    label = ", ".join(f"{name} = {value:g}" for name, value in values.items())
-    k = list(values.values())
-    return label or model.name, k[0] if len(k) == 1 else k or None
-
-
-def _bode_record(args, model, labels: list, data, **more) -> dict:
-    """`mtt bode --json`: the curves' magnitudes and phases on one frequency grid."""
-    unknowns = model.unknowns
-    return {
-        "ok": True, "file": args.file, "out": args.out, "model": model.name,
-        "unknown": unknowns[0] if len(unknowns) == 1 else None,
-        "unknowns": list(unknowns), "k": [k for _, k in labels], **more,
-        "frequency": data.frequency.tolist(), "magnitude_db": _finite(data.magnitude_db),
-        "phase_deg": _finite(data.phase_deg),
-    }  # fmt: skip
-
-
-def _bode_matrix(args, model, points: list[dict], labels: list) -> int:
-    """`mtt bode` with several inputs or outputs: a matrix of diagrams, one per entry."""
-    from mtt.present import bode
-
-    matrix = model.transfer_matrix
-    entries = {}
-    for i, j in ((i, j) for i in range(len(model.outputs)) for j in range(len(model.inputs))):
-        entry = matrix.entry(i, j)
-        systems = [(float("nan"), *entry.at(**point)) for point in points]
-        if all(num.any() for _, num, _ in systems):  # a zero has no magnitude in dB
-            entries[i, j] = systems
-    if not entries:
-        raise MttError("every entry of G(s) is zero: there is no Bode diagram", kind="bad_value")
-    try:
-        data = bode.bode_matrix(entries, model.inputs, model.outputs)
-    except ValueError as exc:
-        raise MttError(str(exc), kind="out_of_range") from None
-    if args.out:
-        title = (f"{model.name}: Bode diagrams from {', '.join(model.inputs)} to "
-                 f"{', '.join(model.outputs)}")  # fmt: skip
-        figure = bode.matrix_figure(data, labels=[label for label, _ in labels], title=title)
-        _save(figure, args.out, args.dpi)
-    if args.json:
-        signals = {"inputs": list(model.inputs), "outputs": list(model.outputs)}
-        _print_json(_bode_record(args, model, labels, data, **signals))
-    else:
-        rows, columns = matrix.shape
-        print(f"wrote {args.out}: {rows}x{columns} Bode diagrams of {model.name} at "
-              f"{'; '.join(label for label, _ in labels)}")  # fmt: skip
+        print(f"wrote {args.out}: Bode diagram of {model.name} at {at}")
     return EXIT_OK
 
 

@@ -1,4 +1,5 @@
-"""Bode diagrams of a model for several values of its unknown (scipy.signal, matplotlib).
+"""Bode diagrams of a model for several values of its unknowns (scipy.signal, matplotlib),
+of every entry of its transfer matrix with several inputs or outputs.
 
 One frequency grid serves every value, wide enough for the poles and zeros of each
 (scipy.signal.findfreqs), so that the curves compare point by point.
@@ -13,6 +14,8 @@ import numpy as np
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 from scipy import signal
+
+from mtt.language.diagnostics import MttError
 
 POINTS = 400
 
@@ -129,3 +132,97 @@ def matrix_figure(data: BodeMatrix, *, labels: Sequence[str], title: str) -> Fig
     next(ax for ax in axes.flat if ax.lines).legend(loc="best", fontsize=7)
     fig.suptitle(title, fontsize=10)
     return fig
+
+
+@dataclass(frozen=True)
+class ModelBode:
+    """A model's Bode diagram at some values of its unknowns: a curve per point (`labels`:
+    `k = 5`, `ra = 1, jl = 10`, or the model's name; `values`: each point's unknowns, a
+    number for one, a list for several, else None), one panel pair per entry of G(s)."""
+
+    model: object  # mtt.api.Model
+    labels: tuple[str, ...]
+    values: tuple[object, ...]
+    data: Bode | BodeMatrix
+
+    @property
+    def several(self) -> bool:
+        return isinstance(self.data, BodeMatrix)
+
+    def figure(self) -> Figure:
+        model, labels = self.model, list(self.labels)
+        if not self.several:
+            title = f"{model.name}: Bode diagram from {model.input} to {model.output}"
+            return figure(self.data, labels=labels, title=title)
+        title = (f"{model.name}: Bode diagrams from {', '.join(model.inputs)} to "
+                 f"{', '.join(model.outputs)}")  # fmt: skip
+        return matrix_figure(self.data, labels=labels, title=title)
+
+    def record(self) -> dict:
+        """`mtt bode --json` (after ok, file and out): the curves' magnitudes and phases on
+        one frequency grid."""
+        unknowns = self.model.unknowns
+        signals = {}
+        if self.several:
+            signals = {"inputs": list(self.model.inputs), "outputs": list(self.model.outputs)}
+        return {
+            "model": self.model.name, "unknown": unknowns[0] if len(unknowns) == 1 else None,
+            "unknowns": list(unknowns), "k": list(self.values), **signals,
+            "frequency": self.data.frequency.tolist(),
+            "magnitude_db": json_lists(self.data.magnitude_db),
+            "phase_deg": json_lists(self.data.phase_deg),
+        }  # fmt: skip
+
+
+def json_lists(array) -> list:
+    """An array as JSON lists, null where a value is not finite (a zero of G(jw) exactly on
+    the grid is -inf dB): JSON has no infinities."""
+    return np.where(np.isfinite(array), array, None).tolist()
+
+
+def point_label(model, point: dict) -> tuple[str, object]:
+    """A point's label (`k = 5`, `ra = 1, jl = 10`; the model's name without unknown) and
+    its unknowns' values (a number for one, a list for several, else None)."""
+    values = {name: float(point.get(name, model.parameters[name])) for name in model.unknowns}
+    label = ", ".join(f"{name} = {value:g}" for name, value in values.items())
+    k = list(values.values())
+    return label or model.name, k[0] if len(k) == 1 else k or None
+
+
+def model_bode(model, points: Sequence[dict]) -> ModelBode:
+    """The Bode diagram of `model` (an mtt.api.Model) at each point (values of unknowns by
+    name; the others the file's), of every entry of G(s) with several inputs or outputs.
+    MttError bad_value when G(s) is zero (no magnitude in dB), out_of_range when floating
+    point cannot hold the response."""
+    labels = [point_label(model, point) for point in points]
+    names, values = tuple(label for label, _ in labels), tuple(k for _, k in labels)
+    if model.bondgraph.several:
+        return ModelBode(model, names, values, _matrix(model, points))
+    systems = []
+    for point, (label, k) in zip(points, labels, strict=True):
+        num, den = model.transfer_function.at(**point)
+        if not num.any():  # no magnitude in dB, no phase (scipy warns and gives -inf)
+            at = f" at {label}" if model.unknowns else ""
+            raise MttError(f"G(s) is zero{at}: there is no Bode diagram", kind="bad_value")
+        systems.append((k if isinstance(k, float) else float("nan"), num, den))
+    try:
+        return ModelBode(model, names, values, bode(systems))
+    except ValueError as exc:
+        raise MttError(str(exc), kind="out_of_range") from None
+
+
+def _matrix(model, points: Sequence[dict]) -> BodeMatrix:
+    """`bode_matrix` of every entry of the model's transfer matrix that is not zero."""
+    matrix = model.transfer_matrix
+    entries = {}
+    for i, j in ((i, j) for i in range(len(model.outputs)) for j in range(len(model.inputs))):
+        entry = matrix.entry(i, j)
+        systems = [(float("nan"), *entry.at(**point)) for point in points]
+        if all(num.any() for _, num, _ in systems):  # a zero has no magnitude in dB
+            entries[i, j] = systems
+    if not entries:
+        raise MttError("every entry of G(s) is zero: there is no Bode diagram", kind="bad_value")
+    try:
+        return bode_matrix(entries, model.inputs, model.outputs)
+    except ValueError as exc:
+        raise MttError(str(exc), kind="out_of_range") from None
