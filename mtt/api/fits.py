@@ -76,3 +76,22 @@ def delegate(function, *args, **options):
         return function(*args, **options)
     except ValueError as exc:
         raise MttError(str(exc), kind="bad_argument") from exc
+
+
+def compare_each(result, held_out, option: str = "validate") -> tuple[list, list[str]]:
+    """The fit compared with each held-out record (mtt.data's Records, by `Fit.compare`:
+    each with its own initial state and output offset), and the warnings: no comparison
+    without a fitted model. A record the fit cannot be compared with is an MttError
+    naming it (after `option`, as the caller names the held-out records)."""
+    if not held_out:
+        return [], []
+    if not np.all(np.isfinite(result.k)):
+        return [], [f"no validation: {result.message}"]
+    compared = []
+    for data in held_out:
+        try:
+            compared.append(result.compare(data.t, data.u, data.y))
+        except ValueError as error:
+            source = data.note.split(" samples from ", 1)[-1]
+            raise MttError(f"{option} {source}: {error}", kind="bad_argument") from None
+    return compared, []

@@ -1,20 +1,19 @@
 """`mtt fit`: the generated module's batch `fit` over whole records, measured or simulated.
 
 Like `estimate`, it builds the estimator module in memory and calls it: the algorithm, its
-uncertainty and its warnings live in the template; what is here reads the records, prints
-the result (text or JSON), the warnings on stderr, and draws the compare plot.
+uncertainty and its warnings live in the template; what is here reads the options, takes
+the records from mtt.data, compares the fit with held-out ones (mtt.api.fits) and prints
+what mtt.present.fits makes of it (text or JSON, the CSV and the compare plot), the
+warnings on stderr.
 """
 
 from __future__ import annotations
 
 import json
-import re
-from itertools import zip_longest
-
-import numpy as np
 
 from mtt import files
 from mtt.api import nonlinear_fits
+from mtt.api.fits import compare_each
 from mtt.api.model import Model
 from mtt.cli.experiment import checked_module, experiment_data, module_for
 from mtt.cli.fit_options import nonlinear_options, options
@@ -24,7 +23,7 @@ from mtt.data.records import columns, read
 from mtt.derivation import pipeline
 from mtt.derivation.nonlinear import nonlinear_parts
 from mtt.language.diagnostics import MttError
-from mtt.present import fits, tables
+from mtt.present import fits
 
 
 def cmd_fit(args) -> int:
@@ -53,50 +52,25 @@ def cmd_fit(args) -> int:
         else:
             result = module.fit(*arrays, **options(module, args))
     except MttError as error:  # the nonlinear fit's refusals (bad_argument)
-        raise UsageError(_files_named(str(error), records)) from None
+        raise UsageError(fits.files_named(str(error), records)) from None
     except ValueError as error:  # "record 1 has 3 samples": name the file
         if len(records) == 1:
             raise
-        raise UsageError(_files_named(str(error), records)) from None
+        raise UsageError(fits.files_named(str(error), records)) from None
     warn("fit", result.warnings)
-    compared = validate(result, held_out)
-    shown_fit = len(result.fitted) == len(records) and all(len(f) for f in result.fitted)
-    if args.plot and shown_fit:  # (an estimate that is not ok is drawn, and said to be)
-        from mtt.present import plots  # matplotlib takes a quarter second to import
-
-        shown = [
-            plots.Record(data.note, data.t, data.y, fitted)
-            for data, fitted in zip(records, result.fitted, strict=True)
-        ]
-        checked = [
-            plots.Record(fits.validation_label(data.note, c), data.t, data.y, c.fitted)
-            for data, c in zip(held_out, compared, strict=False)
-        ]
-        plots.fit(
-            args.plot, shown, output_label=plots.signal_label(module, "output"), dpi=args.dpi,
-            title=f"{module.MODEL}: {fits.estimates(module, result)}, "
-            f"fit {result.fit_percent:.4g} %"
-            + ("" if result.noise is None else f"; noise {fits.noise_text(result.noise)}")
-            + ("" if result.ok else " (not ok: see the warnings)"),
-            validation=checked,
-        )  # fmt: skip
+    try:
+        compared, notes = compare_each(result, held_out, "--validate")
+    except MttError as error:
+        raise UsageError(str(error)) from None
+    warn("fit", notes)
+    if args.plot and fits.shown_fit(result, records):
+        fits.plot_fit(args.plot, module, result, records, held_out, compared, args.dpi)
     elif args.plot:
         warn("fit", [f"no plot: {result.message}"])
-    if args.csv and shown_fit:
-        rows = (
-            (number, t, u, y, fitted, y - fitted)
-            for number, (data, fitted) in enumerate(zip(records, result.fitted, strict=True), 1)
-            for t, u, y, fitted in zip(data.t, data.u, data.y, fitted, strict=True)
-        )
-        files.write_atomic(
-            args.csv, tables.csv_text(["record", "t", "u", "y", "fitted", "residual"], rows)
-        )
+    if args.csv and fits.shown_fit(result, records):
+        files.write_atomic(args.csv, fits.fit_csv(records, result))
     if args.json:
-        record = {"model": module.MODEL, "unknown": module.UNKNOWN, **module.fit_record(result)}
-        record["data"] = [data.note for data in records]
-        if held_out:
-            record["validation"] = validation_records(module, held_out, compared)
-        say(json.dumps(record))
+        say(json.dumps(fits.fit_record(module, result, records, held_out, compared)))
     else:
         lines = [(data.note, c) for data, c in zip(held_out, compared, strict=False)]
         say("\n".join([fits.fit_text(module, records, result), *fits.validation_lines(lines)]))
@@ -116,43 +90,3 @@ def validation_data(module, args) -> list:
     """The --validate records, read and checked as --data is."""
     names = columns(args.columns)
     return [read(module, path, names) for path in args.validate or ()]
-
-
-def validate(result, held_out: list) -> list:
-    """The fit compared with each held-out record (`Fit.compare`): none without a fitted
-    model (a warning says so)."""
-    if not held_out:
-        return []
-    if not np.all(np.isfinite(result.k)):
-        warn("fit", [f"no validation: {result.message}"])
-        return []
-    compared = []
-    for data in held_out:
-        try:
-            compared.append(result.compare(data.t, data.u, data.y))
-        except ValueError as error:
-            source = data.note.split(" samples from ", 1)[-1]
-            raise UsageError(f"--validate {source}: {error}") from None
-    return compared
-
-
-def validation_records(module, held_out: list, compared: list) -> list[dict]:
-    """--json's "validation": per held-out record, its figures (only "data" without a model)."""
-    return [
-        {"data": data.note, **(module.comparison_record(c) if c is not None else {})}
-        for data, c in zip_longest(held_out, compared)
-    ]
-
-
-def _files_named(message: str, records) -> str:
-    """The module's "record i" (from 0, in the order of --data) followed by its file."""
-    sources = [data.note.split(" samples from ", 1)[-1] for data in records]
-    return re.sub(
-        r"\brecord (\d+)\b",
-        lambda match: (
-            f"{match.group(0)} ({sources[int(match.group(1))]})"
-            if int(match.group(1)) < len(sources)
-            else match.group(0)
-        ),
-        message,
-    )

@@ -5,10 +5,12 @@ several inputs or outputs: each output's fit and noise)."""
 from __future__ import annotations
 
 import math
+import re
+from itertools import zip_longest
 
 import numpy as np
 
-from mtt.present import values
+from mtt.present import tables, values
 
 
 def estimates(module, result) -> str:
@@ -131,6 +133,75 @@ def validation_lines(compared) -> list[str]:
 def validation_label(name: str, comparison) -> str:
     """A held-out record's title in the compare plot."""
     return f"validation, fit {comparison.fit_percent:.4g} %: {name}"
+
+
+def shown_fit(result, records) -> bool:
+    """Whether the fit has a fitted output for every record (to draw and to write)."""
+    return len(result.fitted) == len(records) and all(len(f) for f in result.fitted)
+
+
+def plot_fit(path, module, result, records, held_out, compared, dpi: float) -> None:
+    """`mtt fit --plot`: measured and fitted output and the residuals of each record, then
+    each held-out record against the fit (an estimate that is not ok is drawn, and said
+    to be)."""
+    from mtt.present import plots  # matplotlib takes a quarter second to import
+
+    shown = [
+        plots.Record(data.note, data.t, data.y, fitted)
+        for data, fitted in zip(records, result.fitted, strict=True)
+    ]
+    checked = [
+        plots.Record(validation_label(data.note, c), data.t, data.y, c.fitted)
+        for data, c in zip(held_out, compared, strict=False)
+    ]
+    plots.fit(
+        path, shown, output_label=plots.signal_label(module, "output"), dpi=dpi,
+        title=f"{module.MODEL}: {estimates(module, result)}, fit {result.fit_percent:.4g} %"
+        + ("" if result.noise is None else f"; noise {noise_text(result.noise)}")
+        + ("" if result.ok else " (not ok: see the warnings)"),
+        validation=checked,
+    )  # fmt: skip
+
+
+def fit_csv(records, result) -> str:
+    """`mtt fit --csv`: each sample's record, t, u, y, fitted output and residual."""
+    rows = (
+        (number, t, u, y, fitted, y - fitted)
+        for number, (data, fitted) in enumerate(zip(records, result.fitted, strict=True), 1)
+        for t, u, y, fitted in zip(data.t, data.u, data.y, fitted, strict=True)
+    )
+    return tables.csv_text(["record", "t", "u", "y", "fitted", "residual"], rows)
+
+
+def fit_record(module, result, records, held_out, compared) -> dict:
+    """`mtt fit --json`: the module's fit_record, the records and the held-out records."""
+    record = {"model": module.MODEL, "unknown": module.UNKNOWN, **module.fit_record(result)}
+    record["data"] = [data.note for data in records]
+    if held_out:
+        record["validation"] = validation_records(module, held_out, compared)
+    return record
+
+
+def validation_records(module, held_out: list, compared: list) -> list[dict]:
+    """--json's "validation": per held-out record, its figures (only "data" without a model)."""
+    return [
+        {"data": data.note, **(module.comparison_record(c) if c is not None else {})}
+        for data, c in zip_longest(held_out, compared)
+    ]
+
+
+def files_named(message: str, records) -> str:
+    """The module's "record i" (from 0, in the order of the records) followed by its file."""
+    sources = [data.note.split(" samples from ", 1)[-1] for data in records]
+    return re.sub(
+        r"\brecord (\d+)\b",
+        lambda match: (
+            f"{match.group(0)} ({sources[int(match.group(1))]})"
+            if int(match.group(1)) < len(sources)
+            else match.group(0)
+        ),
+        message,
+    )
 
 
 def _finite(value: float) -> float | None:
