@@ -8,7 +8,7 @@ import argparse
 
 import pytest
 
-from mtt.cli.options import in_unknowns_order, named_bounds, named_values
+from mtt.cli.value_options import in_unknowns_order, named_bounds, named_values
 from mtt.language.diagnostics import MttError
 
 

@@ -10,16 +10,14 @@ from __future__ import annotations
 import argparse
 from collections.abc import Callable
 
-from mtt.cli.options import (
+from mtt.cli.options import add_parameter_options, given, words
+from mtt.cli.value_options import (
     BoundsAction,
     Flatten,
-    add_parameter_options,
-    given,
     named_values,
     numbers,
     starts,
     state_values,
-    words,
 )
 from mtt.data import DEFAULT_DT, DEFAULT_SEED, DEFAULT_T_END
 

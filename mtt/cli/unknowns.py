@@ -2,7 +2,7 @@
 
 `--k0`, `--true` and `--bounds` take a bare value for a model with one unknown (`--k0 5`,
 `--bounds 0:20` or `--bounds 0 20`) and values by name for several (`--k0 ra=1,jl=5`,
-`--bounds ra=0.1:10,jl=1:100`; see mtt/cli/options.py). Here they become what the generated
+`--bounds ra=0.1:10,jl=1:100`; see mtt/cli/value_options.py). Here they become what the generated
 module takes: a float for one unknown, an array in the order of its UNKNOWNS for several
 (mtt/present/values.py writes them back as text and JSON).
 """
@@ -13,7 +13,7 @@ from types import ModuleType
 
 import numpy as np
 
-from mtt.cli.options import in_unknowns_order
+from mtt.cli.value_options import in_unknowns_order
 
 
 def point(module: ModuleType, given, option: str):

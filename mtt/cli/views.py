@@ -11,13 +11,13 @@ import sys
 from pathlib import Path
 
 from mtt.cli.options import (
-    Flatten,
     add_parameter_options,
     add_selection_options,
     choice_from_args,
     given,
     selection_from_args,
 )
+from mtt.cli.value_options import Flatten
 from mtt.language.diagnostics import ModelError, MttError
 
 EXIT_OK = 0
