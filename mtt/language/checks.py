@@ -20,7 +20,8 @@ from mtt.language.elements import Component, LocalBond, Parameter, signal_readab
 from mtt.language.expressions import RESERVED, Expression, name_expression
 from mtt.language.parse import ComponentUse, ParsedModel, PortUse
 from mtt.language.ports import SubsystemRules
-from mtt.language.relations import Constitutive, linear_parameter, relation_problems
+from mtt.language.relation_rules import relation_problems
+from mtt.language.relations import Constitutive, linear_parameter
 from mtt.language.subsystems import Instance
 
 
