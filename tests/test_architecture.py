@@ -157,9 +157,64 @@ def test_modules_stay_small():
     long = {
         str(path.relative_to(ROOT)): lines
         for path in MODULES.values()
-        if (lines := len(path.read_text(encoding="utf-8").splitlines())) > 420
+        if (lines := len(path.read_text(encoding="utf-8").splitlines())) > 400
     }
     assert not long, long
+
+
+def _third_party(tree: ast.AST) -> set[str]:
+    """The top-level packages outside mtt that a module imports (lazily or not)."""
+    found = set()
+    for node in _imports(tree):
+        if isinstance(node, ast.Import):
+            found |= {alias.name.partition(".")[0] for alias in node.names}
+        elif not node.level and node.module:
+            found.add(node.module.partition(".")[0])
+    return found - {"mtt", "__future__"}
+
+
+# the libraries that compute (algebra, numbers, graphs, parsing, templates, figures)
+COMPUTING = {"sympy", "numpy", "scipy", "networkx", "lark", "jinja2", "matplotlib"}
+# what the command line may still take from them, and why
+CLI_COMPUTING = {
+    "mtt.cli.running": {"numpy"},  # np.errstate: no floating-point warnings while a command runs
+    "mtt.cli.unknowns": {"numpy"},  # the unknowns' values as the generated module takes them
+}
+
+
+def test_the_command_line_computes_nothing():
+    """mtt/cli only parses arguments and dispatches: it imports none of the libraries that
+    compute (the stages, mtt.present, mtt.data and mtt.api do), but for CLI_COMPUTING."""
+    found = {}
+    for name, path in MODULES.items():
+        if name == "mtt.cli" or name.startswith("mtt.cli."):
+            tree = ast.parse(path.read_text(encoding="utf-8"))
+            used = (_third_party(tree) & COMPUTING) - CLI_COMPUTING.get(name, set())
+            if used:
+                found[name] = sorted(used)
+    assert not found, found
+
+
+# presentation the API does not offer yet (the command line's `mtt check`, `mtt bode` and
+# `mtt identifiability` text): each leaves this list when the API uses it too
+CLI_ONLY_PRESENTATION = {"mtt.present.summary", "mtt.present.bode", "mtt.present.identifiability"}
+
+
+def test_presentation_and_data_input_serve_more_than_the_command_line():
+    """mtt.present and mtt.data are packages that the API and the command line both use:
+    each of their modules is imported from outside mtt/cli (the API, mtt.batch, or another
+    such module), unless it is listed in CLI_ONLY_PRESENTATION."""
+    shared = [name for name in MODULES if name.startswith(("mtt.present.", "mtt.data."))]
+    alone = sorted(
+        name
+        for name in shared
+        if name not in CLI_ONLY_PRESENTATION
+        and not any(not user.startswith("mtt.cli") for user in GRAPH.predecessors(name))
+    )
+    assert not alone, f"used by the command line only: {alone}"
+    stale = sorted(name for name in CLI_ONLY_PRESENTATION if name not in MODULES or any(
+        not user.startswith("mtt.cli") for user in GRAPH.predecessors(name)))  # fmt: skip
+    assert not stale, f"CLI_ONLY_PRESENTATION lists modules used beyond the CLI: {stale}"
 
 
 CYCLE = {
