@@ -11,8 +11,6 @@ import json
 import sys
 from types import ModuleType
 
-import numpy as np
-
 from mtt import files
 from mtt.cli import unknowns
 from mtt.cli.options import choice_from_args
@@ -74,51 +72,13 @@ def experiment_data(module: ModuleType, args, several: bool = False) -> list[Rec
             u,
             k,
             source=source,
-            x0=initial_state(module, getattr(args, "x0", None), u[0], k),
+            x0=records.initial_state(module, getattr(args, "x0", None), u[0], k),
             hold=hold_of(args),
             seed=args.seed,
             noise_uniform=args.noise_uniform,
             noise_snr=args.noise_snr,
         )  # fmt: skip
     ]
-
-
-def initial_state(module: ModuleType, given, u0: float, k) -> np.ndarray | None:
-    """--x0 in the order of the simulator's STATES (None: from rest); a usage error for a
-    count or a name that does not fit, a state where the model's equations have no value
-    (at the first input u0 and the unknowns k), or a module without states (an estimator)."""
-    if given is None:
-        return None
-    states = getattr(module, "STATES", None)
-    if states is None:
-        raise UsageError(
-            "--x0 sets the initial state of a nonlinear model's simulator (a model with "
-            "nonlinear relations, without --at); the transfer function of a linear or "
-            "small-signal model is simulated from rest"
-        )
-    listed = f"{len(states)} state{'s' * (len(states) != 1)}: {', '.join(states)}"
-    if isinstance(given, dict):
-        strangers = [name for name in given if name not in states]
-        if strangers:
-            raise UsageError(f"--x0: {strangers[0]} is not a state of the model (its {listed})")
-        x0 = np.array([given.get(name, 0.0) for name in states])
-    elif len(given) != len(states):
-        raise UsageError(
-            f"--x0: {len(given)} value{'s' * (len(given) != 1)} for the model's {listed}: "
-            f"give one per state in that order, or by name (--x0 {states[0]}=...)"
-        )
-    else:
-        x0 = np.array(given, dtype=float)
-    with np.errstate(all="ignore"):
-        rates = module.rhs(x0, u0, k)
-    if not np.isfinite(rates).all():
-        where = ", ".join(f"{name} = {value:g}" for name, value in zip(states, x0, strict=True))
-        raise UsageError(
-            f"--x0: the model's equations have no value at {where} (with the first input "
-            f"{u0:g}): a state outside the domain of their functions (the square root of a "
-            "negative level, say)"
-        )
-    return x0
 
 
 # the commands --------------------------------------------------------------------------

@@ -231,3 +231,45 @@ def simulate(
         y = module.with_noise(clean, noise_snr, seed=seed)
         note += f", white Gaussian noise at {noise_snr:g} dB SNR (seed {seed})"
     return Record(t, u, y, clean, k, note)
+
+
+def initial_state(module: ModuleType, given, u0: float, k) -> np.ndarray | None:
+    """The initial state x0 (values in the order of the simulator's STATES, or a dict by
+    name: the others at 0) as an array in that order (None: from rest); a DataError for a
+    count or a name that does not fit, a state where the model's equations have no value
+    (at the first input u0 and the unknowns k), or a module without states (an estimator)."""
+    if given is None:
+        return None
+    states = getattr(module, "STATES", None)
+    if states is None:
+        raise DataError(
+            "x0 sets the initial state of a nonlinear model's simulator (a model with "
+            "nonlinear relations, without --at); the transfer function of a linear or "
+            "small-signal model is simulated from rest",
+            "x0",
+        )
+    listed = f"{len(states)} state{'s' * (len(states) != 1)}: {', '.join(states)}"
+    if isinstance(given, dict):
+        strangers = [name for name in given if name not in states]
+        if strangers:
+            raise DataError(f"x0: {strangers[0]} is not a state of the model (its {listed})", "x0")
+        x0 = np.array([given.get(name, 0.0) for name in states])
+    elif len(given) != len(states):
+        raise DataError(
+            f"x0: {len(given)} value{'s' * (len(given) != 1)} for the model's {listed}: "
+            f"give one per state in that order, or by name (x0 {states[0]}=...)",
+            "x0",
+        )
+    else:
+        x0 = np.array(given, dtype=float)
+    with np.errstate(all="ignore"):
+        rates = module.rhs(x0, u0, k)
+    if not np.isfinite(rates).all():
+        where = ", ".join(f"{name} = {value:g}" for name, value in zip(states, x0, strict=True))
+        raise DataError(
+            f"x0: the model's equations have no value at {where} (with the first input "
+            f"{u0:g}): a state outside the domain of their functions (the square root of a "
+            "negative level, say)",
+            "x0",
+        )
+    return x0
