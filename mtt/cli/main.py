@@ -141,11 +141,7 @@ def _nonlinear_ss(args, graph: BondGraph) -> int:
 
     system, _ = state_equations_for(graph, choice_from_args(args))
     if args.json:
-        symbols = tuple(
-            str(s) for s in sorted(system.f.free_symbols | system.g.free_symbols, key=str)
-            if s not in (*system.states, system.input, *system.unknowns)
-        )  # fmt: skip
-        _print_json(nonlinear.equations_json(system, symbols))
+        _print_json(nonlinear.equations_json(system))
     else:
         print(nonlinear.equations_latex(system) if args.latex else nonlinear.equations_text(system))
     return EXIT_OK
@@ -155,13 +151,10 @@ def _derived(args, text, latex) -> int:
     from mtt.derivation.pipeline import NO_UNKNOWN
     from mtt.derivation.theta import refuse_cancelled, theta_matrix
     from mtt.derivation.transfer import transfer_function
-    from mtt.language.components import Role
     from mtt.present import report
 
     equations = loading.equations(args, identify=args.command == "theta")
-    causal = equations.causal
-    storage = [c for c in causal.bondgraph.components if c.type.role is Role.STORAGE]
-    order = len(storage) - len(causal.dependent)
+    order = equations.causal.order
     if equations.several:
         return _derived_matrix(args, equations, order)
     theta = theta_matrix(transfer_function(equations))

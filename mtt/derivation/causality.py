@@ -53,6 +53,14 @@ class CausalBondGraph:
     def integral(self, component: str) -> bool:
         return component not in self.dependent
 
+    @property
+    def order(self) -> int:
+        """The number of storage elements in integral causality: the order of the state
+        equations (of G(s), but for cancellations)."""
+        graph = self.bondgraph
+        storage = [c for c in graph.components if c.type.role is Role.STORAGE]
+        return len(storage) - len(self.dependent)
+
 
 class _Conflict(Exception):
     """Two elements impose one variable; `bonds` are the bonds the clash is made of."""

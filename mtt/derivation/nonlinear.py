@@ -50,6 +50,14 @@ class NonlinearStateSpace:
     domain: tuple[sympy.Expr, ...] = ()
 
 
+def kept(system: NonlinearStateSpace) -> tuple[sympy.Symbol, ...]:
+    """The parameters kept symbolic: the free symbols of f and g that are no state, input
+    or unknown, by name."""
+    fixed = {*system.states, system.input, *system.unknowns}
+    free = set().union(*(e.free_symbols for e in (*system.f, *system.g)))
+    return tuple(sorted(free - fixed, key=lambda symbol: symbol.name))
+
+
 def derive(causal: CausalBondGraph, parametrisation: Parametrisation) -> NonlinearStateSpace:
     """The causal bond graph's state equations x' = f(x, u), y = g(x, u), exact; raise
     `ModelError` for a loop that cannot be solved or a state that needs the input's

@@ -18,6 +18,7 @@ from typing import TYPE_CHECKING
 
 import sympy
 
+from mtt.derivation.nonlinear import kept as kept_symbols
 from mtt.estimator.codegen import environment, load_source, module_path, shadows
 from mtt.estimator.kernels import SIDE, TIE, Frozen, KernelError, freeze, kernel
 from mtt.estimator.literals import finite_float, is_name
@@ -61,13 +62,6 @@ def _check(system: NonlinearStateSpace, kept: list[sympy.Symbol]) -> None:
     n = len(system.states)
     if system.f.shape != (n, 1) or system.g.shape != (1, 1):
         raise ValueError(f"f must be {n} x 1 and g 1 x 1, not {system.f.shape}, {system.g.shape}")
-
-
-def _kept(system: NonlinearStateSpace) -> list[sympy.Symbol]:
-    """The parameters kept symbolic: the free symbols that are no state, input or unknown."""
-    fixed = {*system.states, system.input, *system.unknowns}
-    free = set().union(*(e.free_symbols for e in (*system.f, *system.g)))
-    return sorted(free - fixed, key=lambda symbol: symbol.name)
 
 
 def _kernels(system: NonlinearStateSpace, kept: list[sympy.Symbol]) -> tuple[Frozen, list]:
@@ -147,7 +141,7 @@ def _kernels(system: NonlinearStateSpace, kept: list[sympy.Symbol]) -> tuple[Fro
 def _context(
     system: NonlinearStateSpace, values: dict[str, sympy.Expr], description: str | None
 ) -> dict:
-    kept = _kept(system)
+    kept = list(kept_symbols(system))
     _check(system, kept)
     try:
         frozen, kernels = _kernels(system, kept)

@@ -8,7 +8,7 @@ import math
 import sympy
 
 from mtt.derivation.equilibria import Equilibria
-from mtt.derivation.nonlinear import NonlinearStateSpace
+from mtt.derivation.nonlinear import NonlinearStateSpace, kept
 from mtt.derivation.operating import SmallSignal
 
 
@@ -45,8 +45,9 @@ def equations_latex(ss: NonlinearStateSpace) -> str:
     return "\\begin{aligned}\n" + " \\\\\n".join(f"  {r}" for r in rows) + "\n\\end{aligned}"
 
 
-def equations_json(ss: NonlinearStateSpace, symbols: tuple[str, ...] = ()) -> dict:
-    """The `ss --json` record of a nonlinear model: every expression as exact text."""
+def equations_json(ss: NonlinearStateSpace) -> dict:
+    """The `ss --json` record of a nonlinear model: every expression as exact text, and the
+    parameters kept symbolic (`symbols`)."""
     return {
         "ok": True,
         "model": ss.name,
@@ -56,7 +57,7 @@ def equations_json(ss: NonlinearStateSpace, symbols: tuple[str, ...] = ()) -> di
         "g": str(ss.g[0]),
         "domain": [str(c) for c in ss.domain],
         "unknowns": [str(k) for k in ss.unknowns],
-        "symbols": list(symbols),
+        "symbols": [symbol.name for symbol in kept(ss)],
         "known": {str(name): str(value) for name, value in ss.known.items()},
     }
 
