@@ -140,12 +140,6 @@ def _where(args) -> str:
     return f"{args.jobs} processes" if (args.jobs or 1) > 1 else "in this process"
 
 
-def _place(outcome) -> tuple[str, int | None]:
-    """The file and line of a record's error (its message starts FILE:LINE: for a line)."""
-    line = outcome.error.removeprefix(f"{outcome.name}:").partition(":")[0]
-    return outcome.name, int(line) if line.isdigit() else None
-
-
 def _pooled(module, args, batch, errors: list[str]) -> int:
     from mtt.present import batch as table
 
@@ -154,7 +148,7 @@ def _pooled(module, args, batch, errors: list[str]) -> int:
             say(f"mtt fit: error: {error}", stderr=True)
         more = f" ({len(errors)} of {len(batch)} records could not be read)"
         first = next(outcome for outcome in batch if outcome.error is not None)
-        raise UsageError(errors[0] + (more if len(errors) > 1 else ""), *_place(first))
+        raise UsageError(errors[0] + (more if len(errors) > 1 else ""), *table.place(first))
     if batch.pooled is None:
         raise UsageError("no records to fit")
     result = batch.pooled

@@ -78,18 +78,9 @@ def cmd_estimate(args) -> int:
         )
     (data,) = experiment_data(module, args)
     runs = _runs(module, data, args)
-    labels = estimates.labels(module, runs)
-    curves = [
-        plots.Curve(label, run.result.t, run.result.khat, estimates.minima(module, run.result),
-                    None if several else run.result.normalised_cost, run.result.global_k,
-                    estimates.band(module, run) if args.plot and len(runs) == 1 else None)
-        for label, run in zip(labels, runs, strict=True)
-    ]  # fmt: skip
+    curves = estimates.curves(module, runs, banded=bool(args.plot) and len(runs) == 1)
     title = f"{module.MODEL}: {data.note}"
-    weight = f"{args.S0:g}" if args.S0_relative is None else f"{args.S0_relative:g} relative"
-    settings = f"\u03b2 = {args.beta:g}, S\u2080 = {weight}"
-    if len({run.filter for run in runs}) == 1:
-        settings += f", C(s) = {runs[0].filter}"
+    settings = estimates.settings(runs, args.beta, args.S0, args.S0_relative)
     if args.data_plot:
         plots.data(
             args.data_plot, data.t, data.u, data.y, clean=data.clean, title=title,

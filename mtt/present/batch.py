@@ -14,6 +14,12 @@ from mtt.present.fits import METHOD_NAMES, fit_text, validation_lines
 NONLINEAR = {"pem": "prediction error with the nonlinear model"}  # a simulator's fit
 
 
+def place(outcome) -> tuple[str, int | None]:
+    """The file and line of a record's error (its message starts FILE:LINE: for a line)."""
+    line = outcome.error.removeprefix(f"{outcome.name}:").partition(":")[0]
+    return outcome.name, int(line) if line.isdigit() else None
+
+
 def named(outcome) -> str:
     """A record's error message, starting with its name."""
     named = outcome.error.startswith(outcome.name)

@@ -205,6 +205,30 @@ def cost_range(runs: list[Run], k, given: list[float] | None) -> tuple[float, fl
     return low - margin, high + margin
 
 
+def curves(module: ModuleType, runs: list[Run], banded: bool) -> list:
+    """The figures' curves (mtt.present.plots.Curve), one per run: the estimate against
+    time, the local minima, the cost (one unknown), the global minimum and, when `banded`,
+    the estimate's band."""
+    from mtt.present import plots  # matplotlib: a quarter second, paid by plotting only
+
+    several = len(module.UNKNOWNS) > 1
+    return [
+        plots.Curve(label, run.result.t, run.result.khat, minima(module, run.result),
+                    None if several else run.result.normalised_cost, run.result.global_k,
+                    band(module, run) if banded else None)
+        for label, run in zip(labels(module, runs), runs, strict=True)
+    ]  # fmt: skip
+
+
+def settings(runs: list[Run], beta: float, S0: float, S0_relative: float | None) -> str:
+    """The estimator's settings for a figure's title (the filter when every run has one)."""
+    weight = f"{S0:g}" if S0_relative is None else f"{S0_relative:g} relative"
+    text = f"\u03b2 = {beta:g}, S\u2080 = {weight}"
+    if len({run.filter for run in runs}) == 1:
+        text += f", C(s) = {runs[0].filter}"
+    return text
+
+
 def band(module: ModuleType, run: Run) -> np.ndarray | None:
     """Half-width of an approximate 95 % band about k^(t) (drawn for a single run: several
     would hide one another; one unknown): the final standard error scaled by the
