@@ -14,6 +14,7 @@ from mtt.api.exact import exact, exact_point
 from mtt.api.experiments import Experiments
 from mtt.api.matrix import TransferMatrix
 from mtt.api.results import Causality, StateSpace, SteadyStates, Theta, TransferFunction
+from mtt.api.values import by_name
 from mtt.derivation import pipeline
 from mtt.derivation import theta as derived
 from mtt.derivation.causality import assign
@@ -97,6 +98,34 @@ class Model(Experiments):
             name: self.choice.overrides.get(name, p.value.value if p.value else None)
             for name, p in self.bondgraph.parameters.items()
         }
+
+    def summary(self) -> str:
+        """What `mtt show` prints: the parameters, components, numbered bonds, input and
+        output.
+
+        >>> import mtt
+        >>> print(mtt.load(mtt.example("rlc")).summary().splitlines()[0])
+        model rlc: series RLC circuit
+        """
+        from mtt.present.summary import describe
+
+        return describe(self.bondgraph)
+
+    def bode(self, *points: object):
+        """The Bode diagram `mtt bode` draws, a curve per point (the unknowns' value, given
+        as to `to_scipy`; none: the file's values), of every entry of G(s) with several
+        inputs or outputs: `.figure()` (matplotlib), `.record()` (its --json), `.data`
+        (frequency, magnitude_db, phase_deg).
+
+        >>> import mtt
+        >>> found = mtt.load(mtt.example("dc_drive")).bode(1, 10)
+        >>> found.labels, found.data.magnitude_db.shape
+        (('k = 1', 'k = 10'), (2, 400))
+        """
+        from mtt.present.bode import model_bode
+
+        named = [by_name(self.name, self.unknowns, point) for point in points]
+        return model_bode(self, named or [{}])
 
     def _repr_svg_(self) -> str:
         """The bond graph, drawn (with causal strokes when causality can be assigned)."""
