@@ -167,6 +167,21 @@ def test_sensitivities_agree_with_finite_differences(tanks, arm, hold):
     _agree_with_finite_differences(arm, t, u, np.array(PENDULUM_K), x0, tight)
 
 
+def test_a_looser_tolerance_of_the_sensitivities_alone_keeps_them_to_it(tanks):
+    """sensitivity_rtol (the fit's Jacobian): the states at rtol, the sensitivities at
+    their own tolerance, with fewer steps."""
+    t, u = _record(n=801, span=400.0, period=40)
+    k, x0 = np.array(TWO_TANKS_K), np.array([1.0, 1.0])
+    exact = tanks.sensitivities(t, u, k, x0=x0, hold="zoh", rtol=1e-12, atol=1e-14)
+    loose = tanks.sensitivities(t, u, k, x0=x0, hold="zoh", sensitivity_rtol=1e-6)
+    np.testing.assert_allclose(loose.y, exact.y, rtol=1e-7)
+    for name in ("dy_dk", "dy_dx0"):
+        scale = np.max(np.abs(getattr(exact, name)))
+        assert np.max(np.abs(getattr(loose, name) - getattr(exact, name))) < 1e-4 * scale
+    with pytest.raises(ValueError, match="sensitivity_rtol must be"):
+        tanks.sensitivities(t, u, k, x0=x0, sensitivity_rtol=-1.0)
+
+
 def test_sensitivities_jump_where_a_discontinuous_relation_switches():
     """sign friction, the arm swinging without sticking: crossings of w = 0, each with
     the jump of the sensitivities that the crossing time's shift makes."""
