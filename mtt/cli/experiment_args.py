@@ -269,9 +269,9 @@ def register(commands) -> None:
         "least-squares cost), with a noise model chosen by the BIC, offsets and initial state "
         "estimated; print the estimate, its standard error and 95 % interval, the fit, the "
         "noise model and every warning. A nonlinear model (without --at) is fitted by "
-        "prediction error with its simulator, from the small-signal model's estimate and a "
-        "multistart. Exit status 1 when there is no estimate or a "
-        "diagnostic contradicts it (the reason is printed).",
+        "prediction error with its simulator (and the same noise model), from the "
+        "small-signal model's estimate and a multistart. Exit status 1 when there is no "
+        "estimate or a diagnostic contradicts it (the reason is printed).",
     )
     fit.add_argument("file", metavar="FILE")
     add_parameter_options(fit)
@@ -288,8 +288,8 @@ def register(commands) -> None:
         "--noise",
         choices=("auto", "white", "ar", "arma"),
         default="auto",
-        help="the output noise model of --method pem (default auto: white, AR or ARMA, orders "
-        "by the BIC)",
+        help="the output noise model of --method pem and of a nonlinear model's fit (default "
+        "auto: white, AR or ARMA, orders by the BIC)",
     )
     _filter_options(group, several=False, default="auto")
     group.add_argument(
