@@ -145,6 +145,8 @@ def test_two_unknowns_seen_only_as_a_product_are_reported_not_identifiable():
     assert not found.ok and not found.identifiable
     assert found.determined == "the output depends on a and b only through a*b"
     assert np.all(np.isinf(found.k_se[:2]))
+    assert 0 < found.k_se[2] < 0.05 * found.k[2]  # c is determined: its standard error stays
+    assert abs(found.k[2] - 0.5) < 3 * found.k_se[2]
     assert found.k[0] * found.k[1] == pytest.approx(1.0, rel=0.02)
     assert found.message.startswith("the unknowns are not separately determined")
 
