@@ -377,3 +377,14 @@ def test_mtt_simulate_runs_a_nonlinear_model_by_its_simulator(capsys):
     hand = solve_ivp(tanks, (0.0, 600.0), [0.0, 0.0], t_eval=t, rtol=1e-10, atol=1e-10)
     assert np.allclose(y, hand.y[1] / 40, rtol=1e-6, atol=1e-8)
     assert 10 < y[-1] < 16  # filling towards the steady level (10 / 2.5)^2 = 16
+
+
+def test_a_steady_state_beyond_newtons_reach_is_found_by_continuation_in_the_input():
+    """The diode clipper at 2 V: from rest, Newton's steps overshoot into exp(77); stepping
+    the input up from 0 reaches the diode's forward drop, where is (exp(v/vt) - 1) carries
+    the current (2 - v)/r."""
+    clipper = mtt.load(mtt.example("diode_clipper")).simulator()
+    q = clipper.steady_state(2.0)
+    v = q[0] / 1e-7
+    assert (2.0 - v) / 1000.0 == pytest.approx(1e-12 * math.expm1(v / 0.026), rel=1e-9)
+    assert 0.5 < v < 0.6
