@@ -133,9 +133,10 @@ def coloured(y: np.ndarray, snr_db: float, seed: int, pole: float) -> np.ndarray
     return y + lfilter([1.0], [1.0, -pole], e)
 
 
-def monte_carlo(module, record, truth, seeds: int, snr: float = 20.0, pole: float = 0.0) -> dict:
+def monte_carlo(module, record, truth, seeds: int, snr: float = 20.0, pole: float = 0.0,
+                first: int = 0) -> dict:  # fmt: skip
     rows, compared, clock, kinds = [], [], 0.0, []
-    for seed in range(seeds):
+    for seed in range(first, seeds):
         t, u, clean = record(seed)
         y = coloured(clean, snr, 1000 + seed, pole)
         start = time.process_time()
@@ -150,7 +151,9 @@ def monte_carlo(module, record, truth, seeds: int, snr: float = 20.0, pole: floa
         truth_fit = 100 * (1 - np.linalg.norm(y2 - clean2) / np.linalg.norm(y2 - y2.mean()))
         if found.ok:
             compared.append(found.compare(t2, u2, y2).fit_percent - truth_fit)
-        print(f"  seed {seed}: k = {np.round(found.k, 5)}, ok {found.ok}", file=sys.stderr)
+        print(f"  seed {seed}: k = {np.round(found.k, 6)}, k_se = {np.round(found.k_se, 6)}, "
+              f"ok {found.ok}, validation {compared[-1] if found.ok else math.nan:+.4f}",
+              file=sys.stderr, flush=True)  # fmt: skip
     ok = np.array([row[0] for row in rows])
     k = np.array([row[1] for row in rows])[ok]
     se = np.array([row[2] for row in rows])[ok]
@@ -158,9 +161,9 @@ def monte_carlo(module, record, truth, seeds: int, snr: float = 20.0, pole: floa
     truth = np.asarray(truth, dtype=float)
     covered = (ci[:, :, 0] <= truth) & (truth <= ci[:, :, 1])
     return dict(
-        ok=int(ok.sum()), seeds=seeds, bias=(k.mean(0) - truth) / truth,
+        ok=int(ok.sum()), seeds=seeds - first, bias=(k.mean(0) - truth) / truth,
         ratio=se.mean(0) / k.std(0, ddof=1), coverage=100 * covered.mean(0),
-        validation=np.array(compared), seconds=clock / seeds,
+        validation=np.array(compared), seconds=clock / (seeds - first),
         noise=", ".join(f"{kind} {kinds.count(kind)}" for kind in sorted(set(kinds))),
     )  # fmt: skip
 
@@ -260,6 +263,7 @@ def speed(samples: int) -> list[str]:
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--seeds", type=int, default=40)
+    parser.add_argument("--first", type=int, default=0, help="the first seed (runs in parts)")
     parser.add_argument("--samples", type=int, default=10001)
     parser.add_argument("--no-speed", action="store_true")
     parser.add_argument("--only", choices=("tanks", "coloured", "pendulum", "speed"))
@@ -276,7 +280,8 @@ def main() -> None:
         )
     if args.only in (None, "coloured"):
         tanks = mtt.load(str(ROOT / "models" / "two_tanks.bg")).simulator()
-        figures = monte_carlo(tanks, tanks_record, (2.0, 2.5), args.seeds, pole=POLE)
+        figures = monte_carlo(tanks, tanks_record, (2.0, 2.5), args.seeds, pole=POLE,
+                              first=args.first)  # fmt: skip
         lines += table(f"two tanks, AR(1) noise (pole {POLE})", ("a1", "a2"), figures)
     if args.only in (None, "pendulum"):
         arm = mtt.load(str(ROOT / "models" / "pendulum.bg")).simulator()
