@@ -276,7 +276,9 @@ def main() -> None:
     if args.only in (None, "tanks"):
         tanks = mtt.load(str(ROOT / "models" / "two_tanks.bg")).simulator()
         lines += table(
-            "two tanks", ("a1", "a2"), monte_carlo(tanks, tanks_record, (2.0, 2.5), args.seeds)
+            "two tanks",
+            ("a1", "a2"),
+            monte_carlo(tanks, tanks_record, (2.0, 2.5), args.seeds, first=args.first),
         )
     if args.only in (None, "coloured"):
         tanks = mtt.load(str(ROOT / "models" / "two_tanks.bg")).simulator()
@@ -286,7 +288,9 @@ def main() -> None:
     if args.only in (None, "pendulum"):
         arm = mtt.load(str(ROOT / "models" / "pendulum.bg")).simulator()
         lines += table(
-            "pendulum", ("j", "fc"), monte_carlo(arm, pendulum_record, (0.02, 0.05), args.seeds)
+            "pendulum",
+            ("j", "fc"),
+            monte_carlo(arm, pendulum_record, (0.02, 0.05), args.seeds, first=args.first),
         )
     if args.only != "speed":
         print("\n".join(lines))
