@@ -105,17 +105,61 @@ def test_the_command_line_reads_a_column_per_signal(capsys, tmp_path):
     assert "t,Se:v,Se:tl,Df:speed,Df:current" in capsys.readouterr().err
 
 
+def test_a_record_that_does_not_determine_k_is_said_to_be_not_identifiable():
+    # two sensors determine ra, km, j and b together, but only from an excited record: with
+    # the voltage at rest the outputs are noise, and the exact prediction error is flat
+    module = mtt.load(SENSORS, output="Df:speed,Df:current").estimator()
+    t = np.arange(0.0, 40.0, 0.02)
+    rng = np.random.default_rng(1)
+    with pytest.warns(module.EstimationWarning, match="not identifiable from the signals Se:v"):
+        found = module.fit_signals(t, np.zeros(t.size), rng.standard_normal((t.size, 2)),
+                                   hold="zoh", noise="white")  # fmt: skip
+    assert not found.ok and np.all(np.isinf(found.k_se)) and "not identifiable" in found.message
+
+
+def test_compare_gives_each_outputs_fit_on_a_new_record():
+    t, U, Y = record(motor(), 10.0, 2, seed=3)
+    found = motor().fit(t, U, Y, hold="zoh", noise="white")
+    t2, U2, Y2 = record(motor(), 10.0, 2, seed=4, span=30.0)
+    Y2 = Y2 + [0.5, -0.2]  # another operating point: the offsets are estimated
+    compared = found.compare(t2, U2, Y2)
+    assert compared.samples == t2.size and np.allclose(compared.offset, [0.5, -0.2], atol=0.05)
+    # noise at 20 dB: the noise-free part is 99.5 % of the variance, fit % near 90
+    assert np.all(compared.fit_percent > 85) and np.all(compared.fit_percent < 95)
+    residuals = Y2 - compared.fitted
+    assert np.allclose(compared.residual_rms, np.sqrt(np.mean(residuals**2, 0)))
+    assert len(found.fitted) == 1 and found.fitted[0].shape == Y.shape
+
+
+def test_the_command_line_validates_plots_and_writes_several_signals(capsys, tmp_path):
+    from mtt.cli.main import main
+
+    paths = []
+    for seed, span in ((2, 30.0), (6, 20.0)):
+        t, U, Y = record(motor(), 10.0, 2, seed=seed, span=span)
+        paths.append(tmp_path / f"rig{seed}.csv")
+        np.savetxt(paths[-1], np.column_stack([t, U, Y]), delimiter=",",
+                   header="t,Se:v,Se:tl,Df:speed,Df:current", comments="")  # fmt: skip
+    both = ["--input", "Se:v,Se:tl", "--output", "Df:speed,Df:current", "--hold", "zoh"]
+    fit = ["fit", LOAD, *both, "--data", str(paths[0]), "--validate", str(paths[1])]
+    written = ["--plot", str(tmp_path / "fit.png"), "--csv", str(tmp_path / "fit.csv"),
+               "--data-plot", str(tmp_path / "data.png")]  # fmt: skip
+    assert main([*fit, *written]) == 0
+    text = capsys.readouterr().out
+    assert "Df:speed: fit" in text and "Df:current: fit" in text
+    assert text.count(f"validation on {t.size} samples from {paths[1]}") == 2
+    for name in ("fit.png", "data.png"):
+        assert (tmp_path / name).read_bytes()[:4] == b"\x89PNG"
+    table = np.genfromtxt(tmp_path / "fit.csv", delimiter=",", names=True)
+    assert table.dtype.names[:4] == ("record", "t", "Sev", "Setl")
+    assert np.allclose(table["Dfspeed"] - table["Dfspeed_fitted"], table["Dfspeed_residual"])
+    assert main([*fit, "--json"]) == 0
+    (held,) = json.loads(capsys.readouterr().out)["validation"]
+    assert all(held["signals"][name]["fit_percent"] > 85 for name in ("Df:speed", "Df:current"))
+
+
 @pytest.mark.parametrize(
-    "flag",
-    [
-        ["--validate", "held.csv"],
-        ["--plot", "fit.png"],
-        ["--csv", "fit.csv"],
-        ["--data-plot", "data.png"],
-        ["--method", "iv"],
-        ["--beta", "0.5"],
-        ["--seed", "3"],
-    ],
+    "flag", [["--method", "iv"], ["--method", "ls"], ["--beta", "0.5"], ["--seed", "3"]]
 )
 def test_the_command_line_refuses_what_it_does_not_do_with_several_signals(capsys, tmp_path, flag):
     from mtt.cli.main import main
@@ -123,9 +167,10 @@ def test_the_command_line_refuses_what_it_does_not_do_with_several_signals(capsy
     path = tmp_path / "rig.csv"
     path.write_text("t,Se:v,Se:tl,Df:speed,Df:current\n0,0,0,0,0\n")
     both = ["--input", "Se:v,Se:tl", "--output", "Df:speed,Df:current", "--data", str(path)]
-    assert main(["fit", LOAD, *both, *flag]) == 2
-    assert flag[0] in capsys.readouterr().err
-    assert not list(tmp_path.glob("*.png")) and not (tmp_path / "fit.csv").exists()
+    assert main(["fit", LOAD, *both, *flag, "--plot", str(tmp_path / "fit.png")]) == 2
+    error = capsys.readouterr().err
+    assert flag[0] in error and ("pem" in error or "simulates" in error)
+    assert not list(tmp_path.glob("*.png"))
 
 
 def test_the_api_and_the_command_line_read_several_signals_alike(capsys, tmp_path):
@@ -152,3 +197,67 @@ def test_the_api_and_the_command_line_read_several_signals_alike(capsys, tmp_pat
     (error,) = json.loads(capsys.readouterr().out)["errors"]
     assert (error["kind"], error["file"], error["line"]) == ("bad_data", str(path), 1)
     assert "no column 'v'" in error["message"] and "--columns" in error["message"]
+
+
+def _rig_files(tmp_path, seeds=((2, 30.0), (6, 20.0))) -> list[Path]:
+    paths = []
+    for seed, span in seeds:
+        t, U, Y = record(motor(), 10.0, 2, seed=seed, span=span)
+        paths.append(tmp_path / f"rig{seed}.csv")
+        np.savetxt(paths[-1], np.column_stack([t, U, Y]), delimiter=",",
+                   header="t,Se:v,Se:tl,Df:speed,Df:current", comments="")  # fmt: skip
+    return paths
+
+
+def test_the_generated_command_line_fits_every_signal(capsys, tmp_path):
+    fitted, held = _rig_files(tmp_path)
+    module = motor().estimator()
+    assert module.main(["fit", str(fitted), "--hold", "zoh", "--validate", str(held)]) == 0
+    text = capsys.readouterr().out
+    assert text.startswith("jl = ") and "Df:current: fit" in text
+    assert text.count(f"validation on {held}:") == 2
+    assert module.main(["fit", str(fitted), "--hold", "zoh", "--json"]) == 0
+    found = json.loads(capsys.readouterr().out)
+    assert found["ok"] and abs(found["k"] - 10.0) < 4 * found["k_se"]
+    assert list(found["signals"]) == ["Df:speed", "Df:current"]
+    assert module.main(["fit", str(fitted), "--method", "ls"]) == 2
+    assert "--method pem" in capsys.readouterr().err
+
+
+def test_batch_fits_each_record_of_every_signal(tmp_path):
+    from mtt.batch import estimate_many, fit_many
+
+    paths = [str(path) for path in _rig_files(tmp_path)]
+    batch = fit_many(motor(), paths, jobs=1, hold="zoh", noise="white")
+    module = motor().estimator()
+    for path, outcome in zip(paths, batch, strict=True):
+        t, *columns = module.read_csv(path, ("t", *module.INPUTS, *module.OUTPUTS))
+        alone = module.fit_signals(t, np.column_stack(columns[:2]), np.column_stack(columns[2:]),
+                                   hold="zoh", noise="white")  # fmt: skip
+        assert outcome.ok and outcome.result.k == alone.k and outcome.result.fitted == ()
+    assert "fit % (Df:speed / Df:current)" in batch.table()
+    pooled = fit_many(motor(), paths, jobs=1, pooled=True, hold="zoh", noise="white",
+                      validate=paths[1:])  # fmt: skip
+    (held,) = pooled.validation
+    assert pooled.ok and abs(pooled.pooled.k - 10.0) < 4 * pooled.pooled.k_se
+    assert np.all(held.comparison.fit_percent > 85)
+    assert "validation on" in pooled.table() and "Df:current: fit" in pooled.table()
+    with pytest.raises(mtt.MttError, match="exact prediction error only"):
+        fit_many(motor(), paths, jobs=1, method="iv")
+    with pytest.raises(mtt.MttError, match="follows one input and one output"):
+        estimate_many(motor(), paths, jobs=1, k0=10.0)
+
+
+def test_the_command_line_fits_a_pattern_of_records_of_every_signal(capsys, tmp_path):
+    from mtt.cli.main import main
+
+    _rig_files(tmp_path)
+    both = ["--input", "Se:v,Se:tl", "--output", "Df:speed,Df:current", "--hold", "zoh"]
+    status = main(["fit", LOAD, *both, "--data", str(tmp_path / "rig*.csv"), "--noise", "white",
+                   "--csv", str(tmp_path / "table.csv")])  # fmt: skip
+    assert status == 0
+    text = capsys.readouterr().out
+    assert "2 records, one fit each" in text and "2 of 2 records fitted" in text
+    header, *rows = (tmp_path / "table.csv").read_text().splitlines()
+    assert "fit_percent_Df:speed,fit_percent_Df:current,residual_rms_Df:speed" in header
+    assert len(rows) == 2 and rows[0].startswith(str(tmp_path / "rig2.csv"))

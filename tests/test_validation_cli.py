@@ -55,6 +55,10 @@ def test_mtt_fit_validate_prints_writes_and_plots(capsys, held_out, dc_drive, tm
     assert line.startswith(f"  validation on 2001 samples from {held_out}: fit ")
     assert line.endswith("(its initial state and output offset estimated by least squares)")
     assert plot.read_bytes()[:4] == b"\x89PNG"
+    status, _, err = run_mtt(capsys, "fit", MODEL, "--data", str(held_out), "--data-plot",
+                             str(tmp_path / "data.png"), "--dpi", "50")  # fmt: skip
+    assert status == 0, err  # --data-plot draws the record fitted (it was ignored)
+    assert (tmp_path / "data.png").read_bytes()[:4] == b"\x89PNG"
     status, out, _ = run_mtt(capsys, "fit", MODEL, *SIMULATED, "--validate", str(held_out),
                          "--validate", str(held_out), "--json")  # fmt: skip
     record = json.loads(out)

@@ -10,7 +10,6 @@ from __future__ import annotations
 
 import glob
 import inspect
-import math
 import sys
 from collections.abc import Callable, Iterator, Mapping
 from concurrent.futures import Executor
@@ -23,10 +22,6 @@ from mtt.batch import pooled as pooled_fits
 from mtt.batch import run, validation, worker
 from mtt.batch.validation import Validation, plain
 from mtt.language.diagnostics import MttError
-
-CHUNK = 32  # records per chunk at most
-CHUNKS = 64  # a batch of known size is cut into about this many chunks (few: small ones)
-STREAMED_CHUNK = 8  # records per chunk when their number is not known in advance
 
 
 @dataclass(frozen=True)
@@ -209,26 +204,6 @@ def expand(pattern: str) -> list[str]:
     return paths
 
 
-def _chunks(specs: list | Iterator, size: int | None) -> Iterator[run.Chunk]:
-    if size is None:
-        size = (
-            max(1, min(CHUNK, math.ceil(len(specs) / CHUNKS)))
-            if isinstance(specs, list)
-            else STREAMED_CHUNK
-        )
-    elif not (isinstance(size, int) and size >= 1):
-        raise MttError(f"chunk_size must be a whole number >= 1, not {size!r}", kind="bad_value")
-    items: list = []
-    number = 0
-    for position, (name, spec) in enumerate(specs):
-        items.append((position, name, spec))
-        if len(items) == size:
-            yield run.Chunk(number, items)
-            number, items = number + 1, []
-    if items:
-        yield run.Chunk(number, items)
-
-
 # the executors ----------------------------------------------------------------------------
 
 
@@ -269,7 +244,7 @@ def _each(found: Estimator, records, action: str, executor, jobs, columns, chunk
         return worker.run, (found.name, source, action, chunk.items, tuple(columns), options)
 
     try:
-        for chunk, result in pool.results(_chunks(specs, chunk_size), call):
+        for chunk, result in pool.results(run.chunks(specs, chunk_size), call):
             names = {position: name for position, name, _ in chunk.items}
             if isinstance(result, run.Died):
                 ((position, name, _),) = chunk.items
@@ -287,7 +262,7 @@ def _each(found: Estimator, records, action: str, executor, jobs, columns, chunk
 
 
 def fit_many(model, records, *, executor=None, jobs: int | None = None, pooled: bool = False,
-             columns=("t", "u", "y"), chunk_size: int | None = None,
+             columns=None, chunk_size: int | None = None,
              progress: Progress | None = None, validate=(), **fit_options) -> Batch:  # fmt: skip
     """The generated module's `fit` on each record (or, pooled=True, one fit over them all).
 
@@ -295,6 +270,8 @@ def fit_many(model, records, *, executor=None, jobs: int | None = None, pooled: 
     records: paths (CSV with the named `columns`, or Parquet with pandas installed; a str
     pattern such as "logs/*.csv" is expanded, sorted), (t, u, y) arrays, (name, (t, u, y))
     pairs, or a mapping name -> (t, u, y); an iterator of them is read as the work goes.
+    columns: the time's, input's and output's (default t, u, y). A model of several inputs
+    or outputs: each record fitted by its module's `fit_signals` (see docs/batch.md).
     executor: a concurrent.futures.Executor or a dask.distributed.Client; else `jobs`
     processes (default: one per core; jobs=1 runs here). fit_options: the module's `fit`
     options (method, C, k0, bounds, offset, initial_state, hold, beta, known parameters).
@@ -312,7 +289,13 @@ def fit_many(model, records, *, executor=None, jobs: int | None = None, pooled: 
     """
     found = estimator(model)
     pooled_fits.check_options(found.module, fit_options)
+    columns = worker.default_columns(found.module) if columns is None else tuple(columns)
     held_out = validation.held_out(found.module, records_of(validate or ()), columns)
+    if pooled and worker.several(found.module):
+        specs = list(records_of(records))
+        result, errors = pooled_fits.signals(found, specs, columns, fit_options)
+        outcomes = tuple(Outcome(name, None, errors.get(i)) for i, (name, _) in enumerate(specs))
+        return Batch(outcomes, result, validation.compared(result, held_out), found.module)
     if pooled and not hasattr(found.module, "fit_records"):  # a nonlinear model's simulator
         batch = _joint(found, records, columns, fit_options)
         return replace(batch, validation=validation.compared(batch.pooled, held_out),
@@ -346,6 +329,7 @@ def estimate_many(model, records, *, executor=None, jobs: int | None = None,
     if pooled:
         raise MttError("the recursive estimate follows one record in time: pool records with "
                        "fit_many(..., pooled=True)", kind="bad_argument")  # fmt: skip
+    pooled_fits.refuse_estimate(found.module)  # several inputs or outputs
     signature = inspect.signature(found.module.estimate)
     named = {name for name, p in signature.parameters.items() if p.kind is p.KEYWORD_ONLY}
     try:  # a missing k0 or a misspelt option: one error, not one per record
@@ -367,7 +351,7 @@ def _pooled(found: Estimator, records, executor, jobs, columns, chunk_size, prog
     pool = runner(executor, jobs)
     try:
         nuisances = bool(options.get("offset", True)), bool(options.get("initial_state", True))
-        chunks = list(_chunks(specs, chunk_size))
+        chunks = list(run.chunks(specs, chunk_size))
         steps = pooled_fits.Pooled(found, pool, chunks, columns, progress, *nuisances)
         result = found.module.fit_records(steps, keep=False, **options) if steps.shapes() else None
     finally:

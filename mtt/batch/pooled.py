@@ -28,7 +28,11 @@ class _NoRecords:
 def check_options(module, options: dict) -> None:
     """The module's own checks of fit's options, once, before any record is sent: fit_records
     checks them before it asks the records anything (a nonlinear model's simulator has
-    none: its fit's signature checks their names, each record's fit their values)."""
+    none: its fit's signature checks their names, each record's fit their values; several
+    signals: `fit_signals`' own options, bound to its signature)."""
+    if worker.several(module):
+        _check_signal_options(module, options)
+        return
     try:
         if not hasattr(module, "fit_records"):
             signature = inspect.signature(module.fit)
@@ -41,6 +45,42 @@ def check_options(module, options: dict) -> None:
         return
     except (TypeError, ValueError) as error:
         raise MttError(str(error), kind="bad_argument") from None
+
+
+def _check_signal_options(module, options: dict) -> None:
+    signature = inspect.signature(module.fit_signals)
+    named = {name for name, p in signature.parameters.items() if p.kind is p.KEYWORD_ONLY}
+    if "method" in options and options["method"] != "pem":
+        raise MttError(
+            f"method={options['method']!r}: several inputs or outputs are fitted by the exact "
+            "prediction error only (method='pem')", kind="bad_argument",
+        )  # fmt: skip
+    options = {name: value for name, value in options.items() if name != "method"}
+    try:
+        signature.bind(None, None, None, **options)
+        module._known_values({n: v for n, v in options.items() if n not in named})
+    except (TypeError, ValueError) as error:
+        raise MttError(f"fit_signals: {error}", kind="bad_argument") from None
+
+
+def signals(found: Estimator, specs: list, columns, options: dict):
+    """A pooled fit of several inputs and outputs, here: every record read (a record that
+    cannot be read is an error of its own, as in `Pooled`), then one `fit_signals` over
+    them all; (the fit or None, position -> error)."""
+    module, records, errors = found.module, [], {}
+    for position, (_, spec) in enumerate(specs):
+        try:
+            records.append(worker.read(module, spec, tuple(columns)))
+        except (OSError, ValueError) as error:
+            errors[position] = worker.message(error)
+    options = {name: value for name, value in options.items() if name != "method"}
+    if not records:
+        return None, errors
+    arrays = [list(part) for part in zip(*records, strict=True)]
+    if len(records) == 1:
+        arrays = [part[0] for part in arrays]
+    with worker.one_thread():
+        return module.fit_signals(*arrays, **options), errors
 
 
 def _summed(method: str, parts: bool = False):
@@ -100,3 +140,14 @@ class Pooled:
     moments, residual_sum, noise_sums = (_summed(name) for name in ("moments", "residual_sum",
                                                                      "noise_sums"))  # fmt: skip
     validate, prediction = (_summed(name, parts=True) for name in ("validate", "prediction"))
+
+
+def refuse_estimate(module) -> None:
+    """estimate_many's refusal of a module of several inputs or outputs."""
+    if worker.several(module):
+        raise MttError(
+            f"the recursive estimate follows one input and one output; {module.MODEL} has "
+            f"{', '.join(module.INPUTS)} -> {', '.join(module.OUTPUTS)}: fit each record of "
+            "every signal with fit_many (fit_signals), or load the model with one input and "
+            "one output", kind="bad_argument",
+        )  # fmt: skip

@@ -10,6 +10,7 @@ Every record ends exactly once, as a result or as an error.
 
 from __future__ import annotations
 
+import math
 import multiprocessing
 import os
 import threading
@@ -21,6 +22,7 @@ from concurrent.futures.process import BrokenProcessPool
 from dataclasses import dataclass
 
 from mtt.batch import worker
+from mtt.language.diagnostics import MttError
 
 ATTEMPTS = 3  # deaths of the workers running a chunk before its records run one by one
 IN_FLIGHT = 2  # chunks given per worker at a time: one running, one waiting
@@ -222,3 +224,29 @@ class Dask(Runner):
             return [(future, future.result(), None)]
         except (KilledWorker, CancelledError) as error:
             return [(future, None, f"{type(error).__name__}: {error}")]
+
+
+CHUNK = 32  # records per chunk at most
+CHUNKS = 64  # a batch of known size is cut into about this many chunks (few: small ones)
+STREAMED_CHUNK = 8  # records per chunk when their number is not known in advance
+
+
+def chunks(specs: list | Iterator, size: int | None) -> Iterator[Chunk]:
+    """The (name, spec) pairs in chunks of `size` records (None: a size for their number)."""
+    if size is None:
+        size = (
+            max(1, min(CHUNK, math.ceil(len(specs) / CHUNKS)))
+            if isinstance(specs, list)
+            else STREAMED_CHUNK
+        )
+    elif not (isinstance(size, int) and size >= 1):
+        raise MttError(f"chunk_size must be a whole number >= 1, not {size!r}", kind="bad_value")
+    items: list = []
+    number = 0
+    for position, (name, spec) in enumerate(specs):
+        items.append((position, name, spec))
+        if len(items) == size:
+            yield Chunk(number, items)
+            number, items = number + 1, []
+    if items:
+        yield Chunk(number, items)

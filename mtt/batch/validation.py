@@ -15,7 +15,8 @@ from mtt.language.diagnostics import MttError
 class Validation:
     """A fit compared with a held-out record: `comparison` the module's Comparison without
     its signals (fit_percent, residual_rms, the record's estimated offset and initial
-    state), None where there is no fitted model."""
+    state; several outputs: a SignalsComparison, a figure per output), None where there is
+    no fitted model."""
 
     name: str
     comparison: object | None
@@ -24,7 +25,7 @@ class Validation:
         c = self.comparison
         figures = {"fit_percent": None, "residual_rms": None} if c is None else {
             "fit_percent": plain(c.fit_percent), "residual_rms": plain(c.residual_rms),
-            "offset": plain(c.offset), "initial_state": plain(c.initial_state),
+            "offset": plain(c.offset), "initial_state": plain(getattr(c, "initial_state", None)),
             "samples": c.samples, "estimated": c.estimated,
         }  # fmt: skip
         return {"data": self.name, **figures}

@@ -74,10 +74,25 @@ def one_thread():
     return threadpool_limits(limits=1, user_api="blas")
 
 
+def several(module) -> bool:
+    """Whether the module has several inputs or outputs: its records are (t, U, Y), a
+    column per signal, fitted by `fit_signals`."""
+    return hasattr(module, "fit_signals")
+
+
+def default_columns(module) -> tuple[str, ...]:
+    """The columns of a module's records: t, u, y, or the time and every signal's label."""
+    if several(module):
+        return ("t", *module.INPUTS, *module.OUTPUTS)
+    return ("t", "u", "y")
+
+
 def read(module, spec, columns, cache: bool = False):
     """A record's (t, u, y) arrays: spec is a path (CSV, or Parquet through pandas) or the
-    arrays themselves; then checked as `fit` checks them. cache: keep a file's arrays in
-    this process (a pooled fit's every step reads its records again)."""
+    arrays themselves; then checked as `fit` checks them (several signals: (t, U, Y), the
+    columns the time, every input and every output, as `fit_signals` checks them). cache:
+    keep a file's arrays in this process (a pooled fit's every step reads its records
+    again)."""
     if isinstance(spec, str) and cache:
         status = os.stat(spec)
         key = (spec, tuple(columns), status.st_mtime_ns, status.st_size)
@@ -87,13 +102,15 @@ def read(module, spec, columns, cache: bool = False):
                 _READ.popitem(last=False)
         return _READ[key]
     if isinstance(spec, str):
-        if spec.lower().endswith(PARQUET):
-            t, u, y = _parquet(spec, columns)
-        else:
-            t, u, y = module.read_csv(spec, columns)
+        parquet = spec.lower().endswith(PARQUET)
+        t, *signals = _parquet(spec, columns) if parquet else module.read_csv(spec, columns)
+        if not several(module):
+            return module._records(t, *signals)[0]
+        inputs = len(module.INPUTS)
+        u, y = module.np.column_stack(signals[:inputs]), module.np.column_stack(signals[inputs:])
     else:
         t, u, y = spec
-    return module._records(t, u, y)[0]
+    return (module._signal_records if several(module) else module._records)(t, u, y)[0]
 
 
 def _parquet(path: str, columns):
@@ -142,7 +159,7 @@ def _each(module, chunk, columns, work):
 
 
 def _fitted(module, t, u, y, options):
-    result = module.fit(t, u, y, **options)
+    result = (module.fit_signals if several(module) else module.fit)(t, u, y, **options)
     return module.replace(result, fitted=(), residuals=())  # the sums travel, not the signals
 
 

@@ -51,9 +51,10 @@ def cmd_fit_many(args, kind: str) -> int:
     from mtt import files
     from mtt.batch import api
     from mtt.cli.experiment import checked_module
-    from mtt.cli.fit_options import options
+    from mtt.cli.fit_options import options, signal_options
     from mtt.cli.options import choice_from_args
     from mtt.data import records
+    from mtt.data.signals import signal_columns
     from mtt.derivation import pipeline
     from mtt.estimator import codegen
     from mtt.language.diagnostics import MttError
@@ -70,15 +71,18 @@ def cmd_fit_many(args, kind: str) -> int:
             )  # fmt: skip
         )
     found = api.from_source(codegen.render(pipeline.theta_for(args.file, choice_from_args(args))))
-    module = checked_module(found.module)
+    several = hasattr(found.module, "fit_signals")  # several inputs or outputs: fit_signals
+    module = found.module if several else checked_module(found.module)
+    chosen = signal_options(module, args) if several else options(module, args)
+    names = signal_columns(module, args.columns) if several else records.columns(args.columns)
     client = _client(args.scheduler) if args.scheduler else None
     try:
         with _bar(len(args.data), kind) as bar:
             batch = api.fit_many(
                 found, args.data, executor=client, jobs=None if client else (args.jobs or 1),
-                pooled=kind == "pooled", columns=records.columns(args.columns),
+                pooled=kind == "pooled", columns=names,
                 progress=lambda done, total: bar.update(done - bar.n),
-                validate=args.validate or (), **options(module, args),
+                validate=args.validate or (), **chosen,
             )  # fmt: skip
     except MttError as error:
         raise UsageError(str(error)) from None

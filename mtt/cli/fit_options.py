@@ -21,6 +21,25 @@ def options(module, args) -> dict:
     )  # fmt: skip
 
 
+SIGNAL_SETTINGS = ("noise", "C", "k0", "bounds", "offset", "initial_state", "hold")
+
+
+def signal_options(module, args) -> dict:
+    """The options of `fit_signals` (several inputs or outputs) from the command line; the
+    linear fit's --method iv|ls and --beta are refused there, not ignored."""
+    if args.method != "pem":
+        raise UsageError(
+            f"--method {args.method} is not supported with several inputs or outputs: they "
+            "are fitted by the exact prediction error (--method pem, the default), whose starts "
+            "are the paper's least-squares cost of every signal (docs/estimator.md)"
+        )
+    if args.beta != 0.0:
+        raise UsageError("--beta weighs the samples of --method iv and ls, which are not "
+                         "supported with several inputs or outputs (--method pem is)")  # fmt: skip
+    chosen = options(module, args)
+    return {key: value for key, value in chosen.items() if key in SIGNAL_SETTINGS}
+
+
 def _filter(args):
     """C for the module's `fit`: --filter-T T, --filter TEXT ("auto" by default)."""
     if args.filter is not None and args.filter_T is not None:

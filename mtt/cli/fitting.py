@@ -43,6 +43,8 @@ def cmd_fit(args) -> int:
             return cmd_fit_signals(args, module)
     records = experiment_data(module, args, several=True)
     held_out = validation_data(module, args)  # read first: a wrong path fails before the fit
+    if args.data_plot:
+        _data_plot(module, args, records)
     arrays = [[getattr(data, name) for data in records] for name in ("t", "u", "y")]
     if len(records) == 1:
         arrays = [part[0] for part in arrays]
@@ -75,6 +77,20 @@ def cmd_fit(args) -> int:
         lines = [(data.note, c) for data, c in zip(held_out, compared, strict=False)]
         say("\n".join([fits.fit_text(module, records, result), *fits.validation_lines(lines)]))
     return EXIT_OK if result.ok else EXIT_STOPPED
+
+
+def _data_plot(module, args, records) -> None:
+    """--data-plot: the input and output of the (first) record, as `simulate` draws them."""
+    from mtt.present import plots
+
+    data = records[0]
+    more = f" (the first of {len(records)} records)" if len(records) > 1 else ""
+    plots.data(
+        args.data_plot, data.t, data.u, data.y, clean=data.clean, dpi=args.dpi,
+        title=f"{module.MODEL}: {data.note}{more}",
+        input_label=plots.signal_label(module, "input"),
+        output_label=plots.signal_label(module, "output"),
+    )  # fmt: skip
 
 
 def nonlinear_model(args):

@@ -9,7 +9,15 @@ from types import ModuleType, SimpleNamespace
 import numpy as np
 
 from mtt.present import tables
-from mtt.present.fits import METHOD_NAMES, fit_text, validation_lines
+from mtt.present.fits import (
+    METHOD_NAMES,
+    fit_text,
+    signals_comparison_record,
+    signals_fit_record,
+    signals_fit_text,
+    signals_validation_lines,
+    validation_lines,
+)
 
 NONLINEAR = {"pem": "prediction error with the nonlinear model"}  # a simulator's fit
 
@@ -37,7 +45,7 @@ def _cells(module: ModuleType, outcome) -> tuple[str, ...]:
     """A record's row: its estimate and standard error (each unknown's), fit, warnings."""
     result, count = outcome.result, len(module.UNKNOWNS)
     held_out = [
-        "" if v.comparison is None else f"{v.comparison.fit_percent:.4g}"
+        "" if v.comparison is None else percent(v.comparison.fit_percent)
         for v in outcome.validation
     ]
     if outcome.error is not None:
@@ -45,8 +53,13 @@ def _cells(module: ModuleType, outcome) -> tuple[str, ...]:
                 "failed (the error is on stderr)")  # fmt: skip
     pairs = zip(np.atleast_1d(result.k), np.atleast_1d(result.k_se), strict=True)
     estimates = (cell for k, se in pairs for cell in (f"{k:.6g}", f"{se:.3g}"))
-    return (outcome.name, *estimates, f"{result.fit_percent:.4g}", *held_out,
+    return (outcome.name, *estimates, percent(result.fit_percent), *held_out,
             str(len(result.warnings) or ""), "")  # fmt: skip
+
+
+def percent(fit) -> str:
+    """A fit % cell: one figure, or one per output (several outputs) separated by " / "."""
+    return " / ".join(f"{value:.4g}" for value in np.atleast_1d(fit))
 
 
 def table(
@@ -64,7 +77,9 @@ def table(
     else:
         estimates = tuple(part for name in module.UNKNOWNS for part in (name, f"{name} k_se"))
     held_out = tuple(f"fit % on {v.name}" for v in (batch[0].validation if len(batch) else ()))
-    header = ("file", *estimates, "fit %", *held_out, "warnings", "")
+    several = hasattr(module, "fit_signals")  # several inputs or outputs: a fit % per output
+    fit = f"fit % ({' / '.join(module.OUTPUTS)})" if several else "fit %"
+    header = ("file", *estimates, fit, *held_out, "warnings", "")
     fitted = len(batch) - len(batch.errors)
     failed = f"; {len(batch.errors)} failed" if batch.errors else ""
     return "\n".join([
@@ -79,16 +94,20 @@ def table_csv(module: ModuleType, batch) -> str:
     """One row per record; several unknowns: k, k_se, ci_low and ci_high of each, named."""
     names = [""] if len(module.UNKNOWNS) == 1 else [f"_{name}" for name in module.UNKNOWNS]
     estimates = [f"{part}{name}" for name in names for part in ("k", "k_se", "ci_low", "ci_high")]
-    header = ["file", *estimates, "fit_percent", "residual_rms", "iterations", "warnings", "error"]
+    several = hasattr(module, "fit_signals")  # several inputs or outputs: a fit % per output
+    outputs = [f"_{name}" for name in module.OUTPUTS] if several else [""]
+    figures = [f"{part}{name}" for part in ("fit_percent", "residual_rms") for name in outputs]
+    header = ["file", *estimates, *figures, "iterations", "warnings", "error"]
     rows = []
     for outcome in batch:
         result = None if outcome.error else outcome.result
-        numbers = ("",) * (len(estimates) + 3)
+        numbers = ("",) * (len(estimates) + len(figures) + 1)
         if result is not None:
             columns = zip(np.atleast_1d(result.k), np.atleast_1d(result.k_se),
                           np.reshape(result.ci, (-1, 2)), strict=True)  # fmt: skip
             numbers = (*(v for k, se, (lo, hi) in columns for v in (k, se, lo, hi)),
-                       result.fit_percent, result.residual_rms, result.iterations)  # fmt: skip
+                       *np.atleast_1d(result.fit_percent), *np.atleast_1d(result.residual_rms),
+                       result.iterations)  # fmt: skip
         warnings = " | ".join(outcome.result.warnings) if outcome.result is not None else ""
         rows.append((outcome.name, *numbers, warnings, outcome.error or ""))
     return tables.csv_text(header, rows)
@@ -99,6 +118,9 @@ def pooled_text(module: ModuleType, batch) -> str:
     with each held-out record)."""
     notes = [SimpleNamespace(note=outcome.name) for outcome in batch]
     compared = [(v.name, v.comparison) for v in batch.validation if v.comparison is not None]
+    if hasattr(module, "fit_signals"):
+        return "\n".join([signals_fit_text(module, notes, batch.pooled),
+                          *signals_validation_lines(module, compared)])  # fmt: skip
     return "\n".join([fit_text(module, notes, batch.pooled), *validation_lines(compared)])
 
 
@@ -107,8 +129,15 @@ def record(module: ModuleType, batch) -> dict:
     record with its records' names under "data" (and "validation")."""
     if batch.pooled is None:
         return {"ok": batch.ok, "records": [outcome.record() for outcome in batch]}
+    names = [outcome.name for outcome in batch]
+    if hasattr(module, "fit_signals"):
+        found = signals_fit_record(module, batch.pooled, names)
+        if batch.validation:
+            found["validation"] = [signals_comparison_record(module, v.name, v.comparison)
+                                   for v in batch.validation]  # fmt: skip
+        return found
     found = {"model": module.MODEL, "unknown": module.UNKNOWN, **module.fit_record(batch.pooled)}
-    found["data"] = [outcome.name for outcome in batch]
+    found["data"] = names
     if batch.validation:
         found["validation"] = [v.record() for v in batch.validation]
     return found

@@ -204,17 +204,51 @@ def files_named(message: str, records) -> str:
     )
 
 
+def signals_fit_text(module, records, result) -> str:
+    """A fit of several inputs and outputs (`fit_signals`) as `fit_text` prints one: the
+    records, each unknown's estimate and interval, then per output its fit, residual RMS
+    and noise model."""
+    sources = "; ".join(data.note for data in records)
+    lines = [
+        f"{module.MODEL}: from {', '.join(module.INPUTS)} to {', '.join(module.OUTPUTS)}; {sources}"
+    ]
+    if not result.ok:
+        lines.append(f"  not ok: {result.message}")
+    lines += uncertainty_lines(module, result.k, result.k_se, result.ci)
+    lines.append(f"  method: {METHOD_NAMES[result.method]} of every output, "
+                 f"{result.iterations} Gauss-Newton steps")  # fmt: skip
+    for name, fit, rms, noise in zip(module.OUTPUTS, result.fit_percent, result.residual_rms,
+                                     result.noise, strict=True):  # fmt: skip
+        lines.append(
+            f"  {name}: fit {fit:.4g} %, residual RMS {rms:.3g}, noise {noise_text(noise)}"
+        )
+    return "\n".join(lines)
+
+
+def signals_validation_lines(module, compared) -> list[str]:
+    """A line per held-out record and output, from (its name, the SignalsFit's
+    SignalsComparison on it)."""
+    return [
+        f"  validation on {name}: {output}: fit {fit:.4g} %, residual RMS {rms:.3g}"
+        + (f" ({c.estimated})" if i == len(module.OUTPUTS) - 1 else "")
+        for name, c in compared
+        for i, (output, fit, rms) in enumerate(
+            zip(module.OUTPUTS, c.fit_percent, c.residual_rms, strict=True)
+        )
+    ]
+
+
 def _finite(value: float) -> float | None:
     return float(value) if math.isfinite(value) else None
 
 
-def signals_fit_record(module, result, sources) -> dict:
-    """`mtt fit --json` with several inputs or outputs: each unknown, each output's noise
-    and fit, the records' `sources`."""
+def signals_fit_record(module, result, paths) -> dict:
+    """`mtt fit --json` of a fit of several signals: the estimates and each output's noise
+    model and figures."""
     k, se = np.atleast_1d(result.k), np.atleast_1d(result.k_se)
     return {
         "model": module.MODEL, "inputs": list(module.INPUTS), "outputs": list(module.OUTPUTS),
-        "data": list(sources), "ok": bool(result.ok), "warnings": list(result.warnings),
+        "data": list(paths), "ok": bool(result.ok), "warnings": list(result.warnings),
         "unknowns": {name: {"k": _finite(value), "k_se": _finite(error)}
                      for name, value, error in zip(module.UNKNOWNS, k, se, strict=True)},
         "signals": {name: {"noise": noise.record(), "fit_percent": _finite(fit),
@@ -225,19 +259,30 @@ def signals_fit_record(module, result, sources) -> dict:
     }  # fmt: skip
 
 
-def signals_fit_text(module, result, samples: int, sources) -> str:
-    """`mtt fit` with several inputs or outputs: the estimates, then each output's fit and
-    noise (`samples` in all, read from `sources`)."""
-    lines = [
-        f"{module.MODEL}: from {', '.join(module.INPUTS)} to {', '.join(module.OUTPUTS)}; "
-        f"{samples} samples from {', '.join(sources)}"
-    ]
-    k, se = np.atleast_1d(result.k), np.atleast_1d(result.k_se)
-    for name, value, error in zip(module.UNKNOWNS, k, se, strict=True):
-        lines.append(f"  {name} = {value:.6g} +- {error:.3g} (95 % interval "
-                     f"{value - 1.96 * error:.6g} to {value + 1.96 * error:.6g})")  # fmt: skip
-    for name, noise, fit in zip(module.OUTPUTS, result.noise, result.fit_percent, strict=True):
-        lines.append(f"  {name}: fit {fit:.4g} %, noise {noise.kind}, std {noise.std:.3g}")
-    if not result.ok:
-        lines.append("  not ok: " + result.warnings[0])
-    return "\n".join(lines)
+def signals_comparison_record(module, record: str, comparison) -> dict:
+    """--json's "validation" of a fit of several signals: per held-out record, each
+    output's figures (only "data" without a fitted model)."""
+    if comparison is None:
+        return {"data": record}
+    return {
+        "data": record, "samples": comparison.samples, "estimated": comparison.estimated,
+        "signals": {name: {"fit_percent": _finite(fit), "residual_rms": _finite(rms),
+                           "offset": _finite(offset)}
+                    for name, fit, rms, offset in zip(module.OUTPUTS, comparison.fit_percent,
+                                                      comparison.residual_rms,
+                                                      comparison.offset, strict=True)},
+    }  # fmt: skip
+
+
+def signals_fit_csv(module, records, result) -> str:
+    """A row per sample of each record: its inputs, then each output measured, at the
+    estimate (its own initial state and offset fitted) and the residual."""
+    outputs = [f"{name}{part}" for name in module.OUTPUTS for part in ("", " fitted", " residual")]
+    header = ["record", "t", *module.INPUTS, *outputs]
+    rows = (
+        (number, t, *u, *(value for triple in zip(y, fitted, y - fitted, strict=True)
+                          for value in triple))
+        for number, (data, fitted) in enumerate(zip(records, result.fitted, strict=True), 1)
+        for t, u, y, fitted in zip(data.t, data.u, data.y, fitted, strict=True)
+    )  # fmt: skip
+    return tables.csv_text(header, rows)

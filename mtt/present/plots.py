@@ -228,3 +228,49 @@ def fit(path: str | Path, records: Sequence[Record], *, title: str, output_label
     more = f" ({left} more records not shown)" if left else ""
     figure.suptitle("\n".join(textwrap.wrap(title + more, 90)), fontsize="medium")
     _save(figure, path, dpi)
+
+
+def fit_signals(path: str | Path, records: Sequence[Record], *, title: str,
+                outputs: Sequence[str], dpi: float = 120.0,
+                validation: Sequence[Record] = ()) -> None:  # fmt: skip
+    """A fit of several outputs: one panel per output (a row each: measured and model), one
+    column per record (at most four, held-out `validation` records last, their model in
+    green). Each Record's y and fitted are (samples, outputs)."""
+    held = len(validation[: 4 - min(len(records), 2)])
+    shown = [*records[: 4 - held], *validation[:held]]
+    figure = Figure(figsize=(min(4.0 + 3.0 * len(shown), 14.0), 1.0 + 2.4 * len(outputs)),
+                    layout="constrained")  # fmt: skip
+    FigureCanvasAgg(figure)
+    axes = figure.subplots(len(outputs), len(shown), sharex="col", squeeze=False)
+    for column, record in enumerate(shown):
+        held_out = column >= len(shown) - held
+        for row, _ in enumerate(outputs):
+            ax = axes[row, column]
+            ax.plot(record.t, record.y[:, row], color="tab:gray", linewidth=0.8, label="measured")
+            ax.plot(record.t, record.fitted[:, row], color="tab:green" if held_out else "tab:blue",
+                    linewidth=1.2, label="model")  # fmt: skip
+            ax.grid(True, alpha=0.3)
+        axes[0, column].set_title(
+            "\n".join(textwrap.wrap(record.label, 40 if len(shown) > 1 else 90)), fontsize="small"
+        )
+        axes[-1, column].set_xlabel("time t (s)")
+    for row, label in enumerate(outputs):
+        axes[row, 0].set_ylabel("\n".join(textwrap.wrap(label, 30)))
+    axes[0, 0].legend(loc="best", fontsize="small")
+    left = len(records) + len(validation) - len(shown)
+    more = f" ({left} more records not shown)" if left else ""
+    figure.suptitle("\n".join(textwrap.wrap(title + more, 90)), fontsize="medium")
+    _save(figure, path, dpi)
+
+
+def signals_data(path: str | Path, t: np.ndarray, columns: Sequence[tuple], *, title: str,
+                 dpi: float = 120.0) -> None:  # fmt: skip
+    """Every signal of a record against time, a panel each (inputs grey, outputs blue):
+    `columns` (label, samples, is_input)."""
+    figure, axes = _figure(heights=(1,) * len(columns))
+    for ax, (label, values, is_input) in zip(axes, columns, strict=True):
+        ax.plot(t, values, color="tab:gray" if is_input else "tab:blue", linewidth=0.9)
+        ax.set_ylabel("\n".join(textwrap.wrap(label, 24)))
+    axes[0].set_title("\n".join(textwrap.wrap(title, 80)), fontsize="medium")
+    axes[-1].set_xlabel("time t (s)")
+    _save(figure, path, dpi)
