@@ -909,9 +909,9 @@ def _transitions(A, B, steps: np.ndarray, hold: str) -> tuple[np.ndarray, np.nda
     return E[:, :order, :order], np.swapaxes(Gamma, 1, 2)
 
 
-def _interval_maps(A, B, steps, beta: float, hold: str, forms: np.ndarray, span=None):
-    """Phi, Gamma and W for each step h: the filters of y and u over one interval, and the
-    weighted integrals of the quadratic forms Q of X over its first `span` (default h).
+def _interval_maps(A, B, steps, beta: float, signals: tuple, forms: np.ndarray, span=None):
+    """Phi, Gamma and W for each step h: the filters of the signals over one interval, and
+    the weighted integrals of the quadratic forms Q of X over its first `span` (default h).
 
         z_y(t_i + h) = Phi z_y(t_i) + Gamma[0]^T [y_i, y_(i+1)]   (and u with Gamma[1])
         int_0^span e^(-beta (span - tau)) X^T Q X dtau = v^T W v
@@ -919,29 +919,37 @@ def _interval_maps(A, B, steps, beta: float, hold: str, forms: np.ndarray, span=
     for each of `forms` (q, n+m+2, n+m+2), X the filtered signals [y/C .. s^n y/C,
     u/C .. s^m u/C] and v = [z_y; z_u; y_i; y_(i+1); u_i; u_(i+1)]. One matrix exponential
     per step and form (Van Loan, 1978), all in one call: its diagonal block is the filters'.
+    `signals` gives each signal's interpolation and how many of its filtered states are
+    in X: (("linear", n + 1), (hold, m + 1)) for (y, u); with several inputs and outputs,
+    every output's then every input's, and v every signal's filter state, then each
+    signal's two samples.
     """
     order = A.shape[0]
+    count = len(signals)
     width = order + 2  # one signal's state [z; a; b]
-    d = 2 * width
+    d = count * width
     span = steps if span is None else np.broadcast_to(span, steps.shape)
-    F = linalg.block_diag(_drift(A, B), _drift(A, B)) + 0.5 * beta * np.eye(d)
-    select = np.zeros((n + m + 2, d))  # X = select @ x
-    select[: n + 1, : n + 1] = np.eye(n + 1)
-    select[n + 1 :, width : width + m + 1] = np.eye(m + 1)
+    F = linalg.block_diag(*[_drift(A, B)] * count) + 0.5 * beta * np.eye(d)
+    select = np.zeros((sum(size for _, size in signals), d))  # X = select @ x
+    row = 0
+    for signal, (_, size) in enumerate(signals):
+        select[row : row + size, signal * width : signal * width + size] = np.eye(size)
+        row += size
     block = np.zeros((steps.size, len(forms), 2 * d, 2 * d))
     block[:, :, :d, :d] = -F.T
     block[:, :, :d, d:] = select.T @ forms @ select
     block[:, :, d:, d:] = F
     E = linalg.expm(block * span[:, None, None, None])
     to_x = np.zeros((steps.size, d, d))  # x = to_x @ v
-    to_x[:, :order, :order] = np.eye(order)
-    to_x[:, width : width + order, order : 2 * order] = np.eye(order)
-    to_x[:, order : order + 2, 2 * order : 2 * order + 2] = _interpolation(steps, "linear")
-    to_x[:, width + order :, 2 * order + 2 :] = _interpolation(steps, hold)
+    ends = count * order  # where each signal's two samples start in v
+    for signal, (hold, _) in enumerate(signals):
+        at = signal * width
+        to_x[:, at : at + order, signal * order : (signal + 1) * order] = np.eye(order)
+        to_x[:, at + order : at + width, ends + 2 * signal : ends + 2 * signal + 2] = _interpolation(steps, hold)
     flow = E[:, 0, d:, d:] * np.exp(-0.5 * beta * span)[:, None, None] @ to_x  # x(span) from v
-    Phi = flow[:, :order, :order]  # the same for both filters
-    Gamma = np.stack([flow[:, :order, 2 * order : 2 * order + 2],
-                      flow[:, width : width + order, 2 * order + 2 :]], 1)  # fmt: skip
+    Phi = flow[:, :order, :order]  # the same for every filter
+    Gamma = np.stack([flow[:, signal * width : signal * width + order, ends + 2 * signal : ends + 2 * signal + 2]
+                      for signal in range(count)], 1)  # fmt: skip
     Gamma = np.swapaxes(Gamma, 2, 3)  # (steps, signal, [w_i, w_(i+1)], order)
     W = np.swapaxes(E[..., d:, d:], -1, -2) @ E[..., :d, d:]
     W *= np.exp(-beta * span)[:, None, None, None]
@@ -1767,33 +1775,55 @@ class _Setup:
     A: np.ndarray
     B: np.ndarray
     beta: float
-    hold: str
+    signals: tuple  # each signal's (hold, states in X): y's then u's (see _interval_maps)
     forms: np.ndarray  # the cost's quadratic forms in X, one per power of k
     memory: float  # the filter's slowest time constant
     phi_map: np.ndarray  # phi = [z_y, z_u] @ phi_map (X is the first n+1 and m+1 states)
     floor_map: np.ndarray  # the rounding of phi is about eps |[z_y, z_u]| @ floor_map
 
     @staticmethod
-    def of(Theta: np.ndarray, c: np.ndarray, beta: float, hold: str) -> "_Setup":
+    def of(Theta: np.ndarray, c: np.ndarray, beta: float, hold: str, weights=None) -> "_Setup":
+        """Theta of one channel, or of every channel (outputs, inputs, rows, columns): then
+        the cost is sum_i weights_i e_i^2 / 2 over the outputs' equation errors
+        e_i = A(s) y_i/C - sum_j B_ij(s) u_j/C, every signal filtered by 1/C(s)."""
         A, B = _realisation(c)
         order = c.size - 1
-        phi_map = np.zeros((2 * order, Theta.shape[1]))
-        phi_map[: n + 1], phi_map[order : order + m + 1] = Theta[: n + 1], Theta[n + 1 :]
+        Thetas = Theta[None, None] if Theta.ndim == 2 else Theta
+        outputs, inputs = Thetas.shape[:2]
+        count = outputs + inputs
+        stacked = []  # each output's Theta over X = [each y's n+1 states, each u's m+1]
+        for i in range(outputs):
+            rows = np.zeros((outputs * (n + 1) + inputs * (m + 1), Thetas.shape[-1]))
+            rows[i * (n + 1) : (i + 1) * (n + 1)] = Thetas[i, 0, : n + 1]
+            for j in range(inputs):
+                at = outputs * (n + 1) + j * (m + 1)
+                rows[at : at + m + 1] = Thetas[i, j, n + 1 :]
+            stacked.append(rows)
+        phi_map = np.zeros((count * order, outputs * Thetas.shape[-1]))  # each output's phi
+        for i, rows in enumerate(stacked):
+            columns = slice(i * Thetas.shape[-1], (i + 1) * Thetas.shape[-1])
+            for s in range(count):
+                size, at = (n + 1, s * (n + 1)) if s < outputs else (m + 1, outputs * (n + 1) + (s - outputs) * (m + 1))
+                phi_map[s * order : s * order + size, columns] = rows[at : at + size]
         # a state's rounding is about eps times the size of its filter's whole state, each
         # entry scaled to w/C (s^i w/C is about rate^i w/C): within a factor order, this sum
-        scale = np.tile((c[-1] / c[0]) ** (np.arange(order) / order), 2)
-        reach = (np.abs(phi_map) * scale[:, None]).reshape(2, order, -1).sum(1)
+        scale = np.tile((c[-1] / c[0]) ** (np.arange(order) / order), count)
+        reach = (np.abs(phi_map) * scale[:, None]).reshape(count, order, -1).sum(1)
         floor_map = np.repeat(reach, order, axis=0) / scale[:, None]
-        forms = _cost_forms(Theta)
-        return _Setup(Theta, A, B, beta, hold, forms, float(_memory(c)), phi_map, floor_map)
+        if outputs == 1 and weights is None:
+            forms = _cost_forms(stacked[0])
+        else:
+            forms = sum(w * _cost_forms(rows) for w, rows in zip(weights, stacked, strict=True))
+        signals = (("linear", n + 1),) * outputs + ((hold, m + 1),) * inputs
+        return _Setup(Theta, A, B, beta, signals, forms, float(_memory(c)), phi_map, floor_map)
 
     def maps(self, steps: np.ndarray):
-        """Phi, Gamma (both filters, as one block-diagonal system) and the cost forms W."""
-        return _interval_maps(self.A, self.B, steps, self.beta, self.hold, self.forms)
+        """Phi, Gamma (every filter, as one block-diagonal system) and the cost forms W."""
+        return _interval_maps(self.A, self.B, steps, self.beta, self.signals, self.forms)
 
     def partial(self, step: float, span: float) -> np.ndarray:
         """The cost forms over the first `span` of an interval of length `step`."""
-        maps = _interval_maps(self.A, self.B, np.array([step]), self.beta, self.hold,
+        maps = _interval_maps(self.A, self.B, np.array([step]), self.beta, self.signals,
                               self.forms, span=span)  # fmt: skip
         return maps[2][0]
 
@@ -1841,19 +1871,21 @@ def _rounding_scales(W: np.ndarray) -> np.ndarray:
     return NOISE * EPS * np.sqrt(np.einsum("...de,...de->...", W, W))
 
 
-def _moments_input(z0: np.ndarray, y: np.ndarray, u: np.ndarray, maps, index) -> np.ndarray:
-    """Rows [z_y,l; z_u,l; y_l; y_(l+1); u_l; u_(l+1)], l = 0..len(y) - 1 (the last row's
-    sample values unused): the filter states at every sample, from z0 at the first, and
-    each interval's vector v_l (all rows but the last), in one array."""
+def _moments_input(z0: np.ndarray, w: np.ndarray, maps, index) -> np.ndarray:
+    """Rows [z_y,l; z_u,l; y_l; y_(l+1); u_l; u_(l+1)], l = 0..len(w) - 1 (the last row's
+    sample values unused), w the samples (samples, signals) of [y, u] (several: every
+    output's, then every input's): the filter states at every sample, from z0 at the
+    first, and each interval's vector v_l (all rows but the last), in one array."""
     Phi, Gamma, _ = maps
     order = Phi.shape[-1]
-    rows = np.empty((y.size, 2 * order + 4))
-    ends = rows[:-1, 2 * order :]
-    ends[:, 0], ends[:, 1], ends[:, 2], ends[:, 3] = y[:-1], y[1:], u[:-1], u[1:]
-    rows[-1, 2 * order :] = 0.0
-    states = rows[:, : 2 * order].reshape(y.size, 2, order).swapaxes(0, 1)  # views of rows
-    pairs = ends.reshape(y.size - 1, 2, 2).swapaxes(0, 1)
-    _propagate(Phi, Gamma, pairs, z0.reshape(2, order), index, out=states)
+    samples, count = w.shape
+    rows = np.empty((samples, count * (order + 2)))
+    ends = rows[:-1, count * order :]
+    ends[:, 0::2], ends[:, 1::2] = w[:-1], w[1:]
+    rows[-1, count * order :] = 0.0
+    states = rows[:, : count * order].reshape(samples, count, order).swapaxes(0, 1)  # views
+    pairs = ends.reshape(samples - 1, count, 2).swapaxes(0, 1)
+    _propagate(Phi, Gamma, pairs, z0.reshape(count, order), index, out=states)
     return rows
 
 
@@ -1884,9 +1916,9 @@ class _Run:
 
     def __init__(self, setup: _Setup, k0, S0):
         self.setup = setup
-        self.z = np.zeros(2 * setup.A.shape[0])  # the filter states [z_y, z_u]
-        self.t = -math.inf  # the last sample: time and values
-        self.u = self.y = 0.0
+        self.z = np.zeros(len(setup.signals) * setup.A.shape[0])  # the filter states [z_y, z_u]
+        self.t = -math.inf  # the last sample: time and values [y, u] (several: every signal's)
+        self.w = [0.0] * len(setup.signals)
         self.P = np.zeros(len(BASIS))
         weights = np.broadcast_to(S0, (len(UNKNOWNS),)) / np.max(S0)
         for places, weight, centre in zip(_PRIOR, weights, np.atleast_1d(k0), strict=True):
@@ -1922,7 +1954,7 @@ class _Run:
             if len(found) == 1 else None  # fmt: skip
         return maps
 
-    def _one(self, t: float, u: float, y: float) -> bool:
+    def _one(self, t: float, w: list) -> bool:
         """One sample after the last, in the common case: the same arithmetic as `_piece`,
         in floats where numpy's cost per call would dominate. False, having changed
         nothing, where `_piece` is needed (a new step, an interval to cross in sub-steps,
@@ -1934,8 +1966,8 @@ class _Run:
         Phi, Gamma, W = step[1]
         scales, limit = step[3], setup.limit(step[0])
         order = Phi.shape[-1]
-        ends = np.array([[self.y, y], [self.u, u]])
-        following = self.z.reshape(2, order) @ Phi.T + (ends[:, None] @ Gamma)[:, 0]
+        ends = np.array([self.w, w]).T
+        following = self.z.reshape(len(w), order) @ Phi.T + (ends[:, None] @ Gamma)[:, 0]
         v = np.concatenate([self.z, ends.ravel()])
         noise = setup.noise(following.reshape(1, -1))
         quiet = all(phi <= limit * floor for part in (noise, self.noise)
@@ -1973,24 +2005,26 @@ class _Run:
         scale = max(map(abs, P))
         P = [value / scale for value in P]
         self.P, self.log_scale = np.array(P), self.log_scale + math.log(scale) - setup.beta * h
-        self.z, self.t, self.u, self.y, self.noise = following.ravel(), t, u, y, noise
+        self.z, self.t, self.w, self.noise = following.ravel(), t, w, noise
         self.khat, self.taylor = k, np.array(_taylor(P, k))
         return True
 
-    def advance(self, t: np.ndarray, u: np.ndarray, y: np.ndarray, record: bool = False):
-        """Take checked samples that follow the last. With record, return for each sample
-        reached (all of them unless the run stops) t, k^, the Taylor rows of J about k^
-        and their log scale (J's i-th derivative is i! row[i] exp(scale))."""
-        if not record and t.size == 1 and self._one(t.item(), u.item(), y.item()):
+    def advance(self, t: np.ndarray, w: np.ndarray, record: bool = False):
+        """Take checked samples that follow the last: times, and w (samples, signals) the
+        samples of [y, u] (several: every output's, then every input's). With record,
+        return for each sample reached (all of them unless the run stops) t, k^, the
+        Taylor rows of J about k^ and their log scale (J's i-th derivative is i! row[i]
+        exp(scale))."""
+        if not record and t.size == 1 and self._one(t.item(), w[0].tolist()):
             return None
         pieces = []
         if self.t == -math.inf and t.size:
-            self.t, self.u, self.y, self.informed = t[0], u[0], y[0], t[0]
+            self.t, self.w, self.informed = t[0], w[0].tolist(), t[0]
             self.noise = self.setup.noise(self.z[None])
             if record:
                 pieces.append((t[:1], np.array([self.khat], dtype=float), self.taylor[None],
                                np.array([self.log_scale])))  # fmt: skip
-            t, u, y = t[1:], u[1:], y[1:]
+            t, w = t[1:], w[1:]
         span = 300.0 / self.setup.beta if self.setup.beta > 0 else math.inf
         times = np.concatenate([[self.t], t])
         steps = times[1:] - times[:-1]
@@ -2001,7 +2035,7 @@ class _Run:
         start = 0
         while start < t.size:  # pieces short enough to weigh without overflow
             end = min(start + length, int(np.searchsorted(t, t[start] + span, "right")))
-            piece = self._piece(t[start:end], u[start:end], y[start:end])
+            piece = self._piece(t[start:end], w[start:end])
             pieces.append(piece)
             if record and not self.ok:
                 break
@@ -2010,14 +2044,13 @@ class _Run:
             return tuple(np.concatenate(parts) for parts in zip(*pieces, strict=True))
         return None
 
-    def _piece(self, t, u, y):
+    def _piece(self, t, w):
         setup = self.setup
-        times, us, ys = (np.concatenate([[last], new]) for last, new in
-                         ((self.t, t), (self.u, u), (self.y, y)))  # fmt: skip
+        times, ws = np.concatenate([[self.t], t]), np.concatenate([[self.w], w])
         steps = _Steps.of(times)
         resolution = TIME_RESOLUTION * max(abs(times[0]), abs(times[-1]))
         maps = self._maps(steps.values, resolution)
-        rows = _moments_input(self.z, ys, us, maps, steps.index)
+        rows = _moments_input(self.z, ws, maps, steps.index)
         width = self.z.size
         q = _interval_costs(rows[:-1], maps[2], steps.index)
         noise = setup.noise(rows[:, :width])
@@ -2059,7 +2092,7 @@ class _Run:
             khat, taylor = self._follow(E, times, quiet, partial)
         else:
             khat, taylor = np.empty((0,) + np.shape(self.khat)), self.taylor[None][:0]
-        self.z, self.t, self.u, self.y = rows[-1, :width], times[-1], us[-1], ys[-1]
+        self.z, self.t, self.w = rows[-1, :width], times[-1], ws[-1].tolist()
         scale = np.abs(E[-1]).max()
         self.P, self.log_scale = E[-1] / scale, log_scale[-1] + math.log(scale)
         if len(khat):
@@ -2348,8 +2381,8 @@ def estimate(
         run = _Run(_Setup.of(Theta, c, beta, hold), k0, S0)
         parts = []
         for lo in range(0, t.size, BLOCK):
-            parts.append(run.advance(t[lo : lo + BLOCK], u[lo : lo + BLOCK], y[lo : lo + BLOCK],
-                                     record=True))  # fmt: skip
+            w = np.column_stack([y[lo : lo + BLOCK], u[lo : lo + BLOCK]])
+            parts.append(run.advance(t[lo : lo + BLOCK], w, record=True))
             if progress is not None:
                 progress(float(parts[-1][0][-1]) if parts[-1][0].size else float(t[lo]))
             if not run.ok:
@@ -4873,13 +4906,15 @@ class Tracker:
             k = tracker.update(t, u, y)
     """
 
-    def __init__(self, *, k0, beta=0.1, S0=1e-4, C=None, hold="linear", bounds=None, **known):
+    def __init__(self, *, k0, beta=0.1, S0=1e-4, C=None, hold="linear", bounds=None,
+                 **known):  # fmt: skip
         k0 = _point("k0", k0)
         beta = _positive("beta", beta, allow_zero=True)
         S0 = _prior_weights(S0)
         _choice("hold", hold, HOLDS)
         self.bounds = _bounds(bounds, required=False)
-        self._run = _Run(_Setup.of(theta(**known), filter_polynomial(C), beta, hold), k0, S0)
+        setup = _Setup.of(theta(**known), filter_polynomial(C), beta, hold)
+        self._run = _Run(setup, k0, S0)
         self._global = None
 
     def update(self, t, u, y):
@@ -4891,8 +4926,10 @@ class Tracker:
         does not stop a stream."""
         run = self._run
         sample = _sample(t, u, y, after=run.t)  # one sample as numbers: the common case
-        if sample is None or not run._one(*sample):  # (_one changes nothing unless it succeeds)
-            arrays = _signals(("t", t), ("u", u), ("y", y), minimum=1, after=run.t)
+        if sample is None or not run._one(sample[0], [sample[2], sample[1]]):  # (_one changes
+            # nothing unless it succeeds)
+            t, u, y = _signals(("t", t), ("u", u), ("y", y), minimum=1, after=run.t)
+            arrays = t, np.column_stack([y, u])
             kept = dict(vars(run), cache=dict(run.cache))
             try:
                 run.advance(*arrays)

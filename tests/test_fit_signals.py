@@ -261,3 +261,40 @@ def test_the_command_line_fits_a_pattern_of_records_of_every_signal(capsys, tmp_
     header, *rows = (tmp_path / "table.csv").read_text().splitlines()
     assert "fit_percent_Df:speed,fit_percent_Df:current,residual_rms_Df:speed" in header
     assert len(rows) == 2 and rows[0].startswith(str(tmp_path / "rig2.csv"))
+
+
+def test_the_tracker_follows_every_signal():
+    # the paper's recursion with each output's equation error A y_i - sum_j B_ij u_j
+    module = motor().estimator()
+    t, U, Y = record(motor(), 10.0, 2, seed=3)
+    one = module.Tracker(k0=5.0, hold="zoh", scales=Y.std(0))
+    for i in range(t.size):
+        k = one.update(float(t[i]), U[i], Y[i])
+    chunks = module.Tracker(
+        k0=5.0, hold="zoh", scales=dict(zip(module.OUTPUTS, Y.std(0), strict=True))
+    )
+    for lo in range(0, t.size, 333):
+        found = chunks.update(t[lo : lo + 333], U[lo : lo + 333], Y[lo : lo + 333])
+    assert one.ok and found == pytest.approx(k, rel=1e-12) and abs(k - 10.0) < 0.1
+    G = motor().to_scipy(10.0)  # noise-free: the interpolated outputs' error only
+    clean = signal.lsim((G.A, G.B, G.C, G.D), U, t, interp=False)[1]
+    exact = module.Tracker(k0=5.0, hold="zoh", scales=clean.std(0)).update(t, U, clean)
+    assert exact == pytest.approx(10.0, rel=2e-4)
+    with pytest.raises(ValueError, match="scales: give each output's typical size"):
+        module.Tracker(k0=5.0)
+    with pytest.raises(ValueError, match=r"y must have shape \(1, 2\)"):
+        one.update(t[-1] + 1.0, U[-1], Y[-1, :1])
+    assert one.k == k  # a refused sample leaves the Tracker as it was
+
+
+def test_the_tracker_of_two_inputs_with_one_at_rest_is_the_single_channels():
+    U = record(motor(), 10.0, 2, seed=7)[1]
+    t = np.arange(U.shape[0]) * 0.02
+    U[:, 1] = 0.0
+    G = motor().to_scipy(10.0)
+    speed = signal.lsim((G.A, G.B, G.C, G.D), U, t, interp=False)[1][:, 0]
+    both = mtt.load(LOAD, input="Se:v,Se:tl", output="Df:speed").estimator()
+    alone = mtt.load(LOAD, input="Se:v", output="Df:speed").estimator()
+    k = both.Tracker(k0=5.0, hold="zoh").update(t, U, speed)
+    single = alone.Tracker(k0=5.0, hold="zoh").update(t, U[:, 0], speed)
+    assert k == pytest.approx(single, rel=1e-10)
