@@ -10,13 +10,13 @@ import json
 from itertools import zip_longest
 from types import ModuleType
 
-import numpy as np
-
 from mtt import files
+from mtt.api.fits import compare_each
 from mtt.cli.experiment import refuse_simulation
 from mtt.cli.fit_options import signal_options
 from mtt.cli.running import EXIT_OK, EXIT_STOPPED, UsageError, say, warn
 from mtt.data.signals import read_signals, signal_columns
+from mtt.language.diagnostics import MttError
 from mtt.present import fits
 
 
@@ -38,7 +38,11 @@ def cmd_fit_signals(args, module: ModuleType) -> int:
     arrays = [[getattr(record, name) for record in records] for name in ("t", "u", "y")]
     result = module.fit_signals(*(arrays if len(records) > 1 else [a[0] for a in arrays]), **chosen)
     warn("fit", result.warnings)
-    compared = _validate(result, held_out)
+    try:  # as the one-signal fit's (SignalsFit.compare: a figure per output)
+        compared, notes = compare_each(result, held_out, "--validate")
+    except MttError as error:
+        raise UsageError(str(error)) from None
+    warn("fit", notes)
     if args.plot:
         _plot(module, args, result, records, held_out, compared)
     if args.csv:
@@ -55,24 +59,6 @@ def cmd_fit_signals(args, module: ModuleType) -> int:
         say("\n".join([fits.signals_fit_text(module, records, result),
                        *fits.signals_validation_lines(module, lines)]))  # fmt: skip
     return EXIT_OK if result.ok else EXIT_STOPPED
-
-
-def _validate(result, held_out: list) -> list:
-    """The fit compared with each held-out record (`SignalsFit.compare`): none without a
-    fitted model (a warning says so)."""
-    if not held_out:
-        return []
-    if not np.all(np.isfinite(result.k)):
-        warn("fit", [f"no validation: {result.message}"])
-        return []
-    compared = []
-    for data in held_out:
-        try:
-            compared.append(result.compare(data.t, data.u, data.y))
-        except ValueError as error:
-            source = data.note.split(" samples from ", 1)[-1]
-            raise UsageError(f"--validate {source}: {error}") from None
-    return compared
 
 
 def _plot(module, args, result, records, held_out, compared) -> None:
