@@ -6,7 +6,7 @@ import itertools
 import sympy
 
 from mtt.derivation.transfer import LAPLACE as s
-from mtt.present.polynomials import common_factors_out, factored, in_powers_of_s, sparse
+from mtt.present.polynomials import common_factors_out, factored, in_powers_of_s, sparse, text
 
 x, y, z, w = sympy.symbols("x y z w")
 
@@ -52,3 +52,19 @@ def test_coefficients_outside_the_rationals_take_sympys_way():
     assert sparse(sympy.sqrt(2) * x * s + 1, s) is None
     assert in_powers_of_s(sympy.sqrt(2) * x * s + 1) == "sqrt(2)*x*s + 1"
     assert in_powers_of_s(sympy.Integer(0) * s) == "0"
+
+
+def test_long_sums_are_written_as_sympy_writes_them():
+    big = _many_terms()
+    mixed = sympy.expand(big - 7 * x**3 * y * z**2 * w + 1 - 2 * z**5)
+    for e in (
+        big,
+        mixed,
+        -mixed,
+        factored(big),
+        factored(sympy.expand(-3 * x * big)),
+        sympy.Mul(-1, mixed, evaluate=False),
+        sympy.Mul(sympy.Rational(3, 2), x, mixed, evaluate=False),  # sympy's own way
+        sympy.sqrt(2) * x + y,  # short: sympy's own way
+    ):
+        assert text(e) == str(e)

@@ -13,7 +13,7 @@ from mtt.derivation.theta import Theta
 from mtt.derivation.transfer import LAPLACE
 from mtt.derivation.transfer_matrix import TransferMatrix
 from mtt.present import report
-from mtt.present.polynomials import factored, grouped, in_powers_of_s
+from mtt.present.polynomials import factored, grouped, in_powers_of_s, text
 
 
 def _written(matrix: TransferMatrix) -> report.Written:
@@ -56,7 +56,7 @@ def _reduced(matrix: TransferMatrix, i: int, j: int, written: report.Written) ->
     entry = matrix.entries[i][j]
     num, den = (factored(written(p)) for p in (entry.numerator, entry.denominator))
     cancelled = sympy.factor(written(common))
-    return f"reduced: the factor {cancelled} cancels: G = {grouped(num)} / ({den})"
+    return f"reduced: the factor {cancelled} cancels: G = {grouped(num)} / ({text(den)})"
 
 
 def matrix_text(matrix: TransferMatrix) -> str:

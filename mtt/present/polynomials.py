@@ -16,22 +16,37 @@ from mtt.derivation.sparse import as_expr
 from mtt.derivation.transfer import LAPLACE
 
 # Beyond these, sympy's multivariate factoring takes too long (it looks for primes of the
-# numbers' size, and factors of a sum of many terms): only common factors are taken out.
+# numbers' size, and factors of a sum of many terms or in many symbols: 1.5 s for a
+# coefficient of 20 terms in 21 symbols): only common factors are taken out.
 FACTOR_MAX_TERMS = 24
 FACTOR_MAX_DIGITS = 40
+FACTOR_MAX_SYMBOLS = 12
 
 
 def sparse(expression: sympy.Expr, *first: sympy.Symbol) -> PolyElement | None:
     """The expression as a polynomial over the rationals in `first`, then its other symbols
-    by name; None when it is not one (an algebraic number or a function in it)."""
+    by name; None when it is not an expanded one (an algebraic number or a function in it,
+    a product of sums). Term by term, in time linear in the terms (sympy's `from_expr`
+    adds them one by one, copying the sum each time: 10 minutes for 121393 terms)."""
     others = sorted(expression.free_symbols - set(first), key=lambda x: x.name)
     gens = [*first, *others]
     if not gens:
         return None
-    try:
-        return ring(gens, sympy.QQ)[0].from_expr(expression)
-    except ValueError:
-        return None
+    index = {x: i for i, x in enumerate(gens)}
+    terms: dict[tuple[int, ...], sympy.Rational] = {}
+    for term in sympy.Add.make_args(expression):
+        coefficient, factors = term.as_coeff_mul()
+        if not isinstance(coefficient, sympy.Rational):
+            return None
+        monomial = [0] * len(gens)
+        for factor in factors:
+            base, exponent = factor.as_base_exp()
+            if base not in index or not (exponent.is_Integer and exponent.is_positive):
+                return None
+            monomial[index[base]] += int(exponent)
+        key = tuple(monomial)
+        terms[key] = terms[key] + coefficient if key in terms else coefficient
+    return ring(gens, sympy.QQ)[0].from_dict({m: c for m, c in terms.items() if c != 0})
 
 
 def in_powers_of_s(expression: sympy.Expr) -> str:
@@ -41,7 +56,7 @@ def in_powers_of_s(expression: sympy.Expr) -> str:
         c = factored(coefficient)
         monomial = {0: "", 1: "s"}.get(power, f"s**{power}")
         if not monomial:
-            terms.append(str(c))
+            terms.append(text(c))
         elif c == 1:
             terms.append(monomial)
         elif c == -1:
@@ -82,7 +97,8 @@ def factored(polynomial: sympy.Expr) -> sympy.Expr:
             return sympy.factor_terms(polynomial)
         return sympy.factor(polynomial)
     digits = max((_digits(sympy.QQ.to_sympy(c)) for c in p.values()), default=0)
-    if digits > FACTOR_MAX_DIGITS or len(p) > FACTOR_MAX_TERMS:
+    many = len(p) > FACTOR_MAX_TERMS or p.ring.ngens > FACTOR_MAX_SYMBOLS
+    if digits > FACTOR_MAX_DIGITS or many:
         return common_factors_out(p)
     return sympy.factor(polynomial)
 
@@ -111,4 +127,47 @@ def common_factors_out(p: PolyElement) -> sympy.Expr:
 
 def grouped(expression: sympy.Expr) -> str:
     """The expression as text, in parentheses when it is a sum."""
-    return f"({expression})" if isinstance(expression, sympy.Add) else str(expression)
+    return f"({text(expression)})" if isinstance(expression, sympy.Add) else text(expression)
+
+
+def text(expression: sympy.Expr) -> str:
+    """`str(expression)`, the same characters, written from the sparse polynomial when the
+    expression is a long sum of integer terms, or a product with one: sympy's printer sorts
+    the terms through their general form (9 s for the 17711 of a 10-section ladder)."""
+    args = sympy.Mul.make_args(expression)
+    sums = [a for a in args if isinstance(a, sympy.Add) and len(a.args) > FACTOR_MAX_TERMS]
+    if len(sums) != 1:
+        return str(expression)
+    written = _sum_text(sums[0])
+    if written is None:
+        return str(expression)
+    if len(args) == 1:
+        return written
+    head = sympy.Mul(*(a for a in args if a is not sums[0]))
+    if head.as_coeff_Mul()[0].is_Integer is not True or head.has(sympy.Add):
+        return str(expression)
+    prefix = {1: "", -1: "-"}.get(head, f"{head}*") if head.is_Number else f"{head}*"
+    return f"{prefix}({written})"
+
+
+def _sum_text(expression: sympy.Add) -> str | None:
+    """A sum of integer multiples of monomials as sympy prints it: terms in descending
+    lexicographic order of the symbols sorted by name, each product's factors by name."""
+    p = sparse(expression)
+    if p is None or not all(c.denominator == 1 for c in p.itercoeffs()):
+        return None
+    names = [str(x) for x in p.ring.symbols]
+    terms = []
+    for monomial, c in p.terms():
+        factors = "*".join(
+            n if e == 1 else f"{n}**{e}" for n, e in zip(names, monomial, strict=True) if e
+        )
+        c = int(c)
+        if not factors:
+            term = str(c)
+        elif abs(c) == 1:
+            term = factors if c == 1 else f"-{factors}"
+        else:
+            term = f"{c}*{factors}"
+        terms.append(term)
+    return terms[0] + "".join(f" - {t[1:]}" if t[0] == "-" else f" + {t}" for t in terms[1:])

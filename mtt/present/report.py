@@ -12,7 +12,7 @@ from mtt.derivation.equations import INPUT, OUTPUT, Equations, signal_names
 from mtt.derivation.theta import Theta
 from mtt.derivation.transfer import LAPLACE
 from mtt.language.bondgraph import BondGraph
-from mtt.present.polynomials import factored, grouped, in_powers_of_s
+from mtt.present.polynomials import factored, grouped, in_powers_of_s, text
 
 
 def _read_as_symbol(name: str) -> bool:
@@ -116,7 +116,7 @@ def tf_text(theta: Theta) -> str:
         f"  numerator   (m = {theta.m}):  {in_powers_of_s(num)}",
         f"  denominator (n = {theta.n}):  {in_powers_of_s(den)}",
         "",
-        f"  G(s) = {grouped(factored(num))} / ({factored(den)})",
+        f"  G(s) = {grouped(factored(num))} / ({text(factored(den))})",
     ]
     return "\n".join(lines)
 
