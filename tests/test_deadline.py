@@ -10,7 +10,10 @@ from pathlib import Path
 
 import pytest
 
-from mtt.derivation import deadline
+from mtt.derivation import deadline, nonlinear
+from mtt.derivation.parameters import ParameterChoice, parametrise
+from mtt.derivation.pipeline import load
+from mtt.derivation.structure import causal_for
 from mtt.language.diagnostics import ModelError
 
 MODEL = (Path(__file__).resolve().parent.parent / "models" / "rlc.bg").read_text()
@@ -52,3 +55,17 @@ def test_one_long_computation_is_interrupted_on_the_main_thread(models):
     with pytest.raises(ModelError) as caught, deadline.budget(0.2):
         _stage("one long step", lambda: _spin(10.0, check=False))(graph)
     assert caught.value.diagnostics[0].kind == "too_large"
+
+
+def test_a_nonlinear_models_state_equations_are_under_the_limit_too():
+    """A model's text can ask for intricate algebra in its nonlinear relations as well."""
+    graph = load(Path(__file__).resolve().parent.parent / "models" / "two_tanks.bg")
+    with pytest.raises(ModelError) as caught, deadline.budget(0.0):
+        nonlinear.derive(causal_for(graph), parametrise(graph, ParameterChoice()))
+    [diagnostic] = caught.value.diagnostics
+    assert diagnostic.kind == "too_large" and "the state equations" in diagnostic.message
+    with deadline.budget(30.0):  # and within it, the same model derives
+        assert (
+            len(nonlinear.derive(causal_for(graph), parametrise(graph, ParameterChoice())).states)
+            == 2
+        )

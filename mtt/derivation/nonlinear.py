@@ -13,6 +13,7 @@ from pathlib import Path
 
 import sympy
 
+from mtt.derivation import deadline
 from mtt.derivation.causal_equations import INPUT, OUTPUT, state_equations
 from mtt.derivation.causality import CausalBondGraph
 from mtt.derivation.parameters import ParameterChoice, Parametrisation
@@ -58,6 +59,7 @@ def kept(system: NonlinearStateSpace) -> tuple[sympy.Symbol, ...]:
     return tuple(sorted(free - fixed, key=lambda symbol: symbol.name))
 
 
+@deadline.timed("the state equations", lambda causal: causal.bondgraph)
 def derive(causal: CausalBondGraph, parametrisation: Parametrisation) -> NonlinearStateSpace:
     """The causal bond graph's state equations x' = f(x, u), y = g(x, u), exact; raise
     `ModelError` for a loop that cannot be solved or a state that needs the input's
