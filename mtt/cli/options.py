@@ -27,9 +27,12 @@ NEGATIVE_NUMBER = re.compile(r"-(?:\.?[0-9]|inf|nan)", re.IGNORECASE)
 
 
 class Parser(argparse.ArgumentParser):
-    """An ArgumentParser (its subcommands' too) that reads every negative number as a value."""
+    """An ArgumentParser (its subcommands' too) that reads every negative number as a value
+    and takes options only as spelled: argparse's abbreviations read `simulate --data f.csv`
+    as --data-plot and then refused the CSV as an image format."""
 
     def __init__(self, *args, **kwargs):
+        kwargs.setdefault("allow_abbrev", False)
         super().__init__(*args, **kwargs)
         self._negative_number_matcher = NEGATIVE_NUMBER
 
