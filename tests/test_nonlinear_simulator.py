@@ -388,3 +388,35 @@ def test_a_steady_state_beyond_newtons_reach_is_found_by_continuation_in_the_inp
     v = q[0] / 1e-7
     assert (2.0 - v) / 1000.0 == pytest.approx(1e-12 * math.expm1(v / 0.026), rel=1e-9)
     assert 0.5 < v < 0.6
+
+
+def test_tanks_at_rest_are_simulated_from_sample_to_sample(capsys):
+    """A tank at rest (the most common start) sits where the orifice's sqrt has an infinite
+    derivative: the Rosenbrock steps of a short record cannot start there, an explicit
+    step with positive weights takes the levels off zero. The command of the bug report
+    (5 samples: RODAS4 alone), and rows of parameters, against solve_ivp by hand."""
+    import json
+
+    from mtt.cli.main import main
+
+    model = Path(__file__).resolve().parent.parent / "models" / "two_tanks.bg"
+    assert main(["simulate", str(model), "--t-end", "2", "--dt", "0.5", "--json"]) == 0
+    run = json.loads(capsys.readouterr().out)
+    t, u, y = (np.array(run[name]) for name in ("t", "u", "y"))
+    assert t.size == 5 and np.all(u == u[0]) and u[0] > 0
+
+    def hand(a1, a2):
+        def tanks(_, q):
+            upper = a1 * math.sqrt(max(q[0], 0.0) / 50)
+            return [u[0] - upper, upper - a2 * math.sqrt(max(q[1], 0.0) / 40)]
+
+        exact = solve_ivp(tanks, (0.0, 2.0), [0.0, 0.0], t_eval=t, method="DOP853",
+                          rtol=1e-13, atol=1e-16)  # fmt: skip
+        return exact.y[1] / 40
+
+    assert np.allclose(y, hand(2.0, 2.5), rtol=1e-7, atol=0) and y[-1] > 0
+    simulator = mtt.load(model).simulator()
+    rows = simulator.simulate(t, u, k=[[2.0, 2.5], [1.5, 3.0]], rtol=1e-11, atol=1e-14)
+    for row, k in zip(rows, ([2.0, 2.5], [1.5, 3.0]), strict=True):
+        exact = hand(*k)
+        assert np.max(np.abs(row - exact)) <= 1e-9 * np.max(exact)
