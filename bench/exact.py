@@ -230,10 +230,75 @@ def throughput_rows() -> list[list[str]]:
     return [head, row]
 
 
+def honest_rows(seeds: int) -> list[list[str]]:
+    """Issue 18 item 4 (honest ok): `fit`'s defaults on records long and short; how often
+    it says ok, and the interval it reports (Wald or profile likelihood) among the ok fits
+    and over all. "absorbed": the largest share of an unknown's information the offset and
+    initial state take, the highest among the ok fits (then over all)."""
+    rows = [["record", "noise", "SNR", "unknown", "ok", "profile intervals", "covers (ok)",
+             "covers (all)", "k_se / std (ok)", "bias (ok)", "absorbed (ok; all)",
+             "time per fit"]]  # fmt: skip
+    dc = 0.02 * np.arange(20001)
+    absorber = 0.01 * np.arange(4001)
+    known = {"tau": 2.0, "l": 0.5}
+    cases = [
+        ("DC drive, 3 s, PRBS 0.2 s, dt 0.01", "dc_drive", dc_drive_tf, 10.0,
+         0.01 * np.arange(301), 0.2, 10.0, "white", {}),
+        ("DC drive, 10 s, PRBS 0.2 s, dt 0.01", "dc_drive", dc_drive_tf, 10.0,
+         0.01 * np.arange(1001), 0.2, 20.0, "white", {}),
+        ("DC drive, 400 s, PRBS 1 s, dt 0.02", "dc_drive", dc_drive_tf, 10.0, dc, 1.0, 10.0,
+         "AR(1), pole 0.9", {}),
+        ("absorber, 40 s, PRBS 2 s, dt 0.01", "absorber", absorber_tf, 0.72, absorber, 2.0,
+         10.0, "AR(1), pole 0.9", known),
+        ("DC drive, 400 s, PRBS 1 s, dt 0.02", "dc_drive", dc_drive_tf, 10.0, dc, 1.0, 10.0,
+         "ARMA(2,1)", {}),
+        ("absorber, 40 s, PRBS 2 s, dt 0.01", "absorber", absorber_tf, 0.72, absorber, 2.0,
+         10.0, "ARMA(2,1)", known),
+        ("dc_motor, 60 s, PRBS 0.5 s, dt 0.01", "dc_motor", dc_motor_tf, (1.0, 10.0),
+         0.01 * np.arange(6001), 0.5, 20.0, "white", {}),
+        ("dc_motor, 60 s, PRBS 0.5 s, dt 0.01", "dc_motor", dc_motor_tf, (1.0, 10.0),
+         0.01 * np.arange(6001), 0.5, 10.0, "white", {}),
+    ]  # fmt: skip
+    for label, name, tf, truth, t, period, snr, noise, extra in cases:
+        module = generated(name)
+        truths = np.atleast_1d(truth)
+        found = []  # (k, se, lo, hi, ok, profiled, absorbed, time) per seed
+        for seed in range(seeds):
+            u = prbs(t, period, seed)
+            y = noisy(simulate(tf, truth, t, u, "zoh"), snr, noise, seed)
+            start = time.process_time()
+            result = module.fit(t, u, y, hold="zoh", **extra)
+            spent = time.process_time() - start
+            ci = np.reshape(result.ci, (-1, 2))
+            found.append((np.atleast_1d(result.k), np.atleast_1d(result.k_se), ci[:, 0],
+                          ci[:, 1], result.ok, result.intervals.count("profile"),
+                          result.absorbed, spent))  # fmt: skip
+        ok = np.array([row[4] for row in found])
+        absorbed = np.array([row[6] for row in found])
+        for i, (unknown, value) in enumerate(zip(module.UNKNOWNS, truths, strict=True)):
+            k, se, lo, hi = (np.array([row[j][i] for row in found]) for j in range(4))
+            covers = (lo <= value) & (value <= hi)
+            good = k[ok]
+            spread = good.std(ddof=1) if good.size > 1 else math.nan
+            rows.append([
+                label, noise, f"{snr:g} dB", f"{unknown} = {value:g}", f"{ok.sum()}/{seeds}",
+                f"{sum(row[5] for row in found)}",
+                f"{100 * covers[ok].mean():.0f} %" if ok.any() else "-",
+                f"{100 * covers.mean():.0f} %",
+                f"{se[ok].mean() / spread:.2f}" if good.size > 1 else "-",
+                f"{100 * (good.mean() / value - 1):+.3f} %" if ok.any() else "-",
+                (f"{absorbed[ok].max():.4f}" if ok.any() else "-") + f"; {absorbed.max():.4f}",
+                f"{1e3 * np.median([row[7] for row in found]):.0f} ms",
+            ])  # fmt: skip
+        print(f"  {label}, {noise}, {snr:g} dB done", file=sys.stderr)
+    return rows
+
+
 TABLES = {
     "short": ("Short noise-free records (DC drive, k = 10)", short_rows),
     "dc10": ("DC drive 10 s at 20 dB", dc10_rows),
     "coloured": ("Coloured noise at 10 dB", coloured_rows),
+    "honest": ("Honest ok: how often fit says ok, and its intervals", honest_rows),
     "speed": ("Speed against the output-error peer", lambda seeds: speed_rows(7)),
     "throughput": ("Throughput and memory", lambda seeds: throughput_rows()),
 }

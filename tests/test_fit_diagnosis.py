@@ -133,10 +133,12 @@ def test_a_short_noisy_record_is_not_presented_as_a_precise_estimate(dc_drive):
     )
     fitted, texts = said(dc_drive, dc_drive.fit, t, u, y, hold="zoh", method="ls")
     assert any("estimate: least squares is biased by output noise, or" in w for w in texts)
-    t, u, y = prbs_record(dc_drive, 5.0, 10.0, seed=2)
+    t, u, y = prbs_record(dc_drive, 5.0, 10.0, seed=2)  # k = 5.8 +- 4.2: the profile is open
     fitted, texts = said(dc_drive, dc_drive.fit, t, u, y, hold="zoh")
-    assert texts[0].startswith("k is poorly determined by these data: k_se = ")
-    assert fitted.ok == (fitted.k_se <= abs(fitted.k))
+    assert not fitted.ok and fitted.intervals == ("profile",)
+    assert 1 < fitted.ci[0] < 10 and fitted.ci[1] == np.inf
+    assert texts[0].startswith("the record does not bound k above: its profile likelihood rises")
+    assert any(text.startswith("k is poorly determined by these data: k_se = ") for text in texts)
     t, u, y = prbs_record(dc_drive, 100.0, 10.0, period=1.0)  # a long record: nothing to say
     fitted, texts = said(dc_drive, dc_drive.fit, t, u, y, hold="zoh")
     assert texts == [] and fitted.k == pytest.approx(10.0, abs=3 * fitted.k_se)

@@ -23,16 +23,20 @@ def estimates(module, result) -> str:
     )
 
 
-def uncertainty_lines(module, k, k_se, ci, indent: str = "  ") -> list[str]:
-    """A line per unknown: its estimate, standard error and 95 % interval."""
+def uncertainty_lines(module, k, k_se, ci, indent: str = "  ", kinds=()) -> list[str]:
+    """A line per unknown: its estimate, standard error and 95 % interval (kinds: per
+    unknown, "profile" for a profile-likelihood interval; none given: k +- 1.96 k_se)."""
+    kinds = tuple(kinds) or ("wald",) * len(module.UNKNOWNS)
     return [
-        f"{indent}{name} = {value:.6g} \u00b1 {se:.3g} (standard error; 95 % interval "
+        f"{indent}{name} = {value:.6g} \u00b1 {se:.3g} (standard error; 95 % "
+        f"{'profile-likelihood interval' if kind == 'profile' else 'interval'} "
         f"{low:.6g} to {high:.6g})"
-        for name, value, se, (low, high) in zip(
+        for name, value, se, (low, high), kind in zip(
             module.UNKNOWNS,
             np.atleast_1d(k),
             np.atleast_1d(k_se),
             np.reshape(ci, (-1, 2)),
+            kinds,
             strict=True,
         )  # fmt: skip
     ]
@@ -69,9 +73,11 @@ def fit_text(module, records, result) -> str:
         return "\n".join(lines)
     if not result.ok:
         lines.append(f"  not ok: {result.warnings[0] if result.warnings else result.message}")
-    lines += uncertainty_lines(module, result.k, result.k_se, result.ci)
     if getattr(result, "shooting", None):  # a nonlinear model's (its simulator's fit)
+        lines += uncertainty_lines(module, result.k, result.k_se, result.ci)
         return "\n".join(lines + prediction_error_lines(module, result))
+    lines += uncertainty_lines(module, result.k, result.k_se, result.ci,
+                               kinds=getattr(result, "intervals", ()))  # fmt: skip
     steps = {"pem": "Gauss-Newton steps", "iv": "iterations"}.get(result.method)
     steps = f", {result.iterations} {steps}" if steps else ""
     if len(module.UNKNOWNS) == 1:
