@@ -46,13 +46,16 @@ class Fit:
             return f"{head}</p><p>no estimate: {html.escape(self.result.message)}</p>"
         if not self.result.ok:
             head += f"</p><p>not ok: {html.escape(self.result.message)}"
+        kinds = tuple(getattr(self.result, "intervals", ()))
+        kinds = kinds or ("wald",) * len(self.module.UNKNOWNS)
         cells = zip(self.module.UNKNOWNS, np.atleast_1d(self.result.k),
-                    np.atleast_1d(self.result.k_se), np.reshape(self.result.ci, (-1, 2)),
+                    np.atleast_1d(self.result.k_se), np.reshape(self.result.ci, (-1, 2)), kinds,
                     strict=True)  # fmt: skip
         rows = "".join(
             f"<tr><td>{html.escape(name)}</td><td>{k:.6g}</td><td>{se:.3g}</td>"
-            f"<td>{low:.6g} to {high:.6g}</td></tr>"
-            for name, k, se, (low, high) in cells
+            f"<td>{low:.6g} to {high:.6g}{' (profile likelihood)' if kind == 'profile' else ''}"
+            "</td></tr>"
+            for name, k, se, (low, high), kind in cells
         )
         warnings = "".join(f"<li>{html.escape(text)}</li>" for text in self.result.warnings)
         return (
