@@ -3057,37 +3057,51 @@ def _forced(real: _Realisation, t, u, hold: str) -> np.ndarray:
 
 def _free(real: _Realisation, t: np.ndarray, steps: "_Steps") -> np.ndarray:
     """The free responses h Phi(t_i - t_0) e_j at the samples, a column per state j."""
-    return _free_rows(real.F, real.h[None], t, steps, real.order)[:, 0]
+    return _free_rows(real.F, real.h[None], t, steps, real.order)[0]
+
+
+def _powers(Phi: np.ndarray, count: int) -> np.ndarray:
+    """Phi^0 .. Phi^(count - 1), (count, size, size), by doubling: log2(count) products of
+    stacked matrices (each power a product of at most log2(count) squarings)."""
+    size = Phi.shape[0]
+    out = np.empty((count, size, size))
+    out[0] = np.eye(size)
+    filled, power = 1, Phi
+    while filled < count:
+        take = min(filled, count - filled)
+        np.matmul(out[:take], power, out=out[filled : filled + take])
+        filled += take
+        if filled < count:
+            power = power @ power
+            power[np.abs(power) < TINY] = 0.0  # (subnormal numbers are slow)
+    return out
 
 
 def _free_rows(F: np.ndarray, H: np.ndarray, t: np.ndarray, steps: "_Steps", columns: int):
-    """The last `columns` columns of each row of H Phi(t_i - t_0) at the samples, (samples,
-    rows, columns), Phi(t) = e^(F t).
+    """The last `columns` columns of each row of H Phi(t_i - t_0) at the samples, (rows,
+    samples, columns), Phi(t) = e^(F t); each row's (samples, columns) contiguous.
 
     Regular sampling: R_i = H Phi^i by blocks of L samples, R_(qL + j) = R_(qL) Phi^j, the
-    block starts following R_((q+1)L) = R_(qL) Phi^L (then below TINY: 0, where a fast
-    mode has died out), each block one product with the stacked powers Phi^0..Phi^(L-1)."""
+    block starts R_(qL) = H (Phi^L)^q (below TINY: 0, where a fast mode has died out), the
+    powers by doubling (`_powers`), each row's blocks one product with the stacked powers
+    Phi^0..Phi^(L-1)."""
     size, rows = F.shape[0], H.shape[0]
     Phi = linalg.expm(F * steps.values[:, None, None])
     if steps.index is None:
         length = max(64, math.isqrt(t.size))
-        powers = np.empty((length + 1, size, size))
-        powers[0] = np.eye(size)
-        for j in range(length):
-            np.matmul(powers[j], Phi[0], out=powers[j + 1])
+        powers = _powers(Phi[0], length + 1)
         count = -(-t.size // length)
-        starts = np.empty((count, rows, size))
-        starts[0] = H
-        for q in range(1, count):
-            np.matmul(starts[q - 1], powers[length], out=starts[q])
-        starts[np.abs(starts) < TINY] = 0.0  # (subnormal numbers are slow)
+        starts = H @ _powers(powers[length], count)  # (count, rows, size)
+        starts[np.abs(starts) < TINY] = 0.0
         stacked = powers[:length, :, size - columns :].transpose(1, 0, 2).reshape(size, -1)
-        out = (starts @ stacked).reshape(count, rows, length, columns).transpose(0, 2, 1, 3)
-        return out.reshape(count * length, rows, columns)[: t.size]
+        out = np.empty((rows, count * length, columns))
+        for r in range(rows):
+            np.matmul(starts[:, r], stacked, out=out[r].reshape(count, length * columns))
+        return out[:, : t.size]
     quiet = np.zeros((columns, t.size - 1, 1))
     Gamma = np.zeros((len(Phi), columns, 1, size))
     states = _propagate(Phi, Gamma, quiet, np.eye(size)[size - columns :], steps.index)
-    return np.einsum("lis,rs->irl", states, H)  # (start l, sample i, state s)
+    return np.ascontiguousarray(np.einsum("lis,rs->ril", states, H))  # (start l, sample i, state s)
 
 
 def _nuisance_matrix(real: _Realisation, t, steps, offset: bool, initial_state: bool):
@@ -3134,14 +3148,16 @@ def _augmented_matrix(real: _Realisation) -> np.ndarray:
     """The augmented system's matrix, [[F, .., 0, dF_1], .., [0, .., F, dF_p], [0, .., 0, F]]
     for the state [dz/dk_1; ..; dz/dk_p; z]: upper quasi-triangular as F is."""
     count, order = len(real.dd), real.order
-    F = linalg.block_diag(*[real.F] * (count + 1))
+    F = np.zeros((order * (count + 1), order * (count + 1)))
+    for j in range(count + 1):
+        F[j * order : (j + 1) * order, j * order : (j + 1) * order] = real.F
     F[: count * order, count * order :] = real.dF.reshape(count * order, order)
     return F
 
 
 def _free_slopes(real: _Realisation, t, steps) -> tuple[np.ndarray, np.ndarray]:
     """The free responses h Phi(t_i - t_0) (samples, order) and their derivatives with
-    respect to the unknowns (samples, unknowns, order), from the augmented system: the row
+    respect to the unknowns (unknowns, samples, order), from the augmented system: the row
     [0, .., h, .., 0, dh_j] (h in the j-th place) times its Phi^i ends in d/dk_j (h Phi^i)."""
     count, order = len(real.dd), real.order
     H = np.zeros((count + 1, order * (count + 1)))
@@ -3149,7 +3165,7 @@ def _free_slopes(real: _Realisation, t, steps) -> tuple[np.ndarray, np.ndarray]:
         H[j, j * order : (j + 1) * order] = real.h
     H[:, count * order :] = np.r_[real.dh, real.h[None]]
     rows = _free_rows(_augmented_matrix(real), H, t, steps, order)
-    return rows[:, count], rows[:, :count]
+    return rows[count], rows[:count]
 
 
 def _output_slopes(real: _Realisation, z, dz, u) -> np.ndarray:
@@ -3211,6 +3227,29 @@ def _diagonal_blocks(A: np.ndarray) -> list[tuple[int, int]] | None:
     return blocks
 
 
+def _pair_mode(P: np.ndarray):
+    """(lambda, v (2, 1), w) of a real 2 x 2 block P with complex eigenvalues: lambda the one
+    of positive imaginary part, v its unit eigenvector, w the first row of [v, conj v]^-1
+    (so that P's recursion is twice the real part of lambda's); None when the eigenvalues
+    are real or the eigenvectors worse conditioned than PAIR_CONDITION. In closed form (the
+    general eigensolver costs more than a short record's recursion)."""
+    (a, b), (c, d) = P
+    half = 0.5 * (a - d)
+    discriminant = half * half + b * c
+    if not discriminant < 0:
+        return None
+    value = complex(0.5 * (a + d), math.sqrt(-discriminant))
+    first, second = np.array([b, value - a]), np.array([value - d, c])  # both eigenvectors
+    vector = first if abs(first[0]) + abs(first[1]) >= abs(second[0]) + abs(second[1]) else second
+    vector = vector / np.linalg.norm(vector)
+    overlap = abs(vector @ vector)  # |v^H conj(v)|: the singular values of [v, conj v] are
+    if not overlap < 1.0 or (1.0 + overlap) > PAIR_CONDITION**2 * (1.0 - overlap):  # sqrt(1 +- it)
+        return None
+    determinant = vector[0] * vector[1].conjugate() - vector[0].conjugate() * vector[1]
+    row = np.array([vector[1].conjugate(), -vector[0].conjugate()]) / determinant
+    return value, vector[:, None], row
+
+
 def _triangular(Phi: np.ndarray, drive: np.ndarray, z0: np.ndarray, blocks, out) -> bool:
     """States z_0..z_N (into out, (order, N + 1): a row per state) of z_(i+1) = Phi z_i +
     drive_i (drive (order, N), a row per state), Phi upper
@@ -3225,10 +3264,10 @@ def _triangular(Phi: np.ndarray, drive: np.ndarray, z0: np.ndarray, blocks, out)
     modes = []
     for start, size in blocks:
         if size == 2:
-            values, vectors = np.linalg.eig(Phi[start : start + 2, start : start + 2])
-            if values[0].imag == 0 or np.linalg.cond(vectors) > PAIR_CONDITION:
+            mode = _pair_mode(Phi[start : start + 2, start : start + 2])
+            if mode is None:
                 return False
-            modes.append((values[0], vectors[:, :1], np.linalg.inv(vectors)[0]))
+            modes.append(mode)
         else:
             modes.append(None)
     out[:, 0] = z0
@@ -3400,7 +3439,7 @@ def _noise_orders(noise: str) -> list[tuple[int, int]]:
 def _stable_polynomial(c: np.ndarray) -> np.ndarray:
     """c (in q^-1, c[0] = 1) with its roots pulled within STABLE of the origin (roots
     outside the unit circle reflected inside): a stable, inversely stable filter."""
-    if c.size < 2:
+    if c.size < 2 or _within(c, STABLE, strict=True):
         return c
     roots = np.roots(c)
     size = np.abs(roots)
@@ -3415,29 +3454,52 @@ def _stable_polynomial(c: np.ndarray) -> np.ndarray:
 def _is_stable(c: np.ndarray) -> bool:
     """Whether c's roots lie within STABLE of the origin (no unit root: a noise model that
     integrates would read any drift of the model's error as noise)."""
-    return c.size < 2 or bool((np.abs(np.roots(c)) <= STABLE).all())
+    if c.size < 2:
+        return True
+    found = _within(c, STABLE, strict=False)
+    return found if found is not None else bool((np.abs(np.roots(c)) <= STABLE).all())
+
+
+def _within(c: np.ndarray, radius: float, strict: bool) -> bool | None:
+    """Whether the roots of c (in q^-1, c[0] = 1) of degree 1 or 2 lie within radius of the
+    origin (strict: inside), by the Schur-Cohn (Jury) conditions; None for other degrees
+    (np.roots then: an eigenvalue problem, dearer than the filter on a short record)."""
+    if c.size == 2:
+        size = abs(c[1]) / radius
+        return bool(size < 1 if strict else size <= 1)
+    if c.size == 3:
+        b1, b2 = c[1] / radius, c[2] / radius**2
+        if strict:
+            return bool(abs(b2) < 1 and abs(b1) < 1 + b2)
+        return bool(abs(b2) <= 1 and abs(b1) <= 1 + b2)
+    return None
 
 
 def _lagged_gram(columns: list[tuple[np.ndarray, int]], start: int) -> np.ndarray:
-    """The Gram matrix sum_(t = start..N-1) of the columns x[t - lag], one per (x, lag),
-    without forming them: each entry is a full-length product of two signals at the lags'
-    difference, less the few terms outside the range (each signal's products at one
-    difference computed once)."""
+    """The Gram matrix sum_(t = start..N-1) of the columns x[t - lag], one per (x, lag) (x
+    zero before the record), without forming them: each entry is a full-length product of
+    two signals at the lags' difference (each signal pair's products at one difference
+    computed once), less the products at t < start and at t >= N (a few rows, formed)."""
     size = columns[0][0].size
     full: dict = {}
     G = np.empty((len(columns), len(columns)))
     for a, (x, i) in enumerate(columns):
         for b in range(a, len(columns)):
             z, j = columns[b]
-            d = j - i  # sum over s = start-i..N-1-i of x[s] z[s - d]
+            d = j - i  # sum over every s where both are defined of x[s] z[s - d]
             key = (id(x), id(z), d)
-            if key not in full:  # over every s where both are defined
-                full[key] = float(x[max(d, 0) : size + min(d, 0)] @ z[max(-d, 0) : size - max(d, 0)])
-            lo, hi = start - i, size - 1 - i
-            head = np.arange(max(d, 0), lo)
-            tail = np.arange(hi + 1, size + min(d, 0))
-            G[a, b] = G[b, a] = full[key] - x[head] @ z[head - d] - x[tail] @ z[tail - d]
-    return G
+            if key not in full:  # (none when the lags differ by the record's length or more)
+                full[key] = (float(x[max(d, 0) : size + min(d, 0)] @ z[max(-d, 0) : size - max(d, 0)])
+                             if abs(d) < size else 0.0)  # fmt: skip
+            G[a, b] = full[key]
+    lags = np.array([lag for _, lag in columns])
+    outside = np.r_[np.arange(start), size + np.arange(max(lags.max(), 0))]  # the t left out
+    where = outside[:, None] - lags[None, :]  # (t, column): the sample x[t - lag]
+    inside = (where >= 0) & (where < size)
+    where = np.clip(where, 0, size - 1)
+    rows = np.stack([x[where[:, a]] for a, (x, _) in enumerate(columns)], 1) * inside
+    G -= np.triu(rows.T @ rows)
+    return np.triu(G) + np.triu(G, 1).T
 
 
 def _lag_gram(v: np.ndarray, lags: int) -> np.ndarray:
@@ -3496,7 +3558,25 @@ def _noise_sums(v: np.ndarray, request: tuple):
         return _lag_gram(v, request[1])
     if kind == "innovations":
         return _innovation_gram(v, request[1], request[2])
-    return np.array([float(np.sum(NoiseModel(*filters).whiten(v) ** 2)) for filters in request[1]])
+    return _prediction_sums(v, request[1])
+
+
+def _prediction_sums(v: np.ndarray, models: list) -> np.ndarray:
+    """Each noise model's sum of squared prediction errors of v (whitened from rest): an
+    autoregression's (D(q) v, a finite filter) as d^T S d from one lag Gram matrix S of v,
+    the others by filtering."""
+    sums = np.empty(len(models))
+    finite = [i for i, (_, ma) in enumerate(models) if np.size(ma) == 1]
+    if finite:
+        lags = max(np.size(models[i][0]) for i in finite) - 1
+        S = _lagged_gram([(v, j) for j in range(lags + 1)], 0)
+        for i in finite:
+            d = np.asarray(models[i][0], dtype=float)
+            sums[i] = float(d @ S[: d.size, : d.size] @ d)
+    for i in range(len(models)):
+        if i not in finite:
+            sums[i] = float(np.sum(NoiseModel(*models[i]).whiten(v) ** 2))
+    return sums
 
 
 def _choose_noise(Theta, records, k, setting: str, settings, count: int) -> NoiseModel:
@@ -3535,7 +3615,7 @@ def _choose_noise(Theta, records, k, setting: str, settings, count: int) -> Nois
 
 PEM_ITERATIONS = 60  # Gauss-Newton steps at most from each start
 PEM_CONVERGED = 1e-10  # steps below this, relative: converged
-SETTLED_COST = 1e-6  # a Gauss-Newton step that would lower the cost by less than this many
+SETTLED_COST = 1e-4  # a Gauss-Newton step that would lower the cost by less than this many
 # noise variances (moving k by a thousandth of its standard error) is not taken: converged
 RESIDUAL_ROUNDING = 1e-10  # residuals below this share of the output's spread (RMS) are
 # rounding (noise-free data): a step that would gain only a millionth of it is not taken
@@ -3660,7 +3740,7 @@ def _record_prediction(Theta, record, k, noise: NoiseModel, settings, jacobian: 
         if not augmented:
             output, psi = _sensitivities(real, t, u, hold, z0)
         elif initial_state:  # the free response's slopes with z0 held
-            output, psi = forced + Xi[:, int(offset) :] @ z0, slopes + free_slopes @ z0
+            output, psi = forced + Xi[:, int(offset) :] @ z0, slopes + (free_slopes @ z0).T
         else:
             output, psi = forced, slopes
     fitted = output + value
