@@ -3612,7 +3612,8 @@ def _choose_noise(Theta, records, k, setting: str, settings, count: int) -> Nois
 PEM_ITERATIONS = 60  # Gauss-Newton steps at most from each start
 PEM_CONVERGED = 1e-10  # steps below this, relative: converged
 SETTLED_COST = 1e-4  # a Gauss-Newton step that would lower the cost by less than this many
-# noise variances (moving k by a thousandth of its standard error) is not taken: converged
+# noise variances (moving k by a hundredth of its standard error; least_squares' ftol = 1e-8
+# of the cost on 2e4 samples) is not taken: converged
 RESIDUAL_ROUNDING = 1e-10  # residuals below this share of the output's spread (RMS) are
 # rounding (noise-free data): a step that would gain only a millionth of it is not taken
 DAMPING = 1e-4  # the first Levenberg-Marquardt damping, relative to J^T J's diagonal
