@@ -3708,22 +3708,29 @@ def _record_prediction(Theta, record, k, noise: NoiseModel, settings, jacobian: 
     if real is None or not _predictor_stable(real):
         return _Prediction(math.inf, t.size, 0)
     augmented = jacobian and real.order  # the output and its slopes from one recursion
+    free = None  # the free responses (initial state), a column per state
     with np.errstate(all="ignore"):
         if augmented:
             z, dz = _augmented(real, t, u, hold, np.zeros(real.order))
             forced, slopes = real.h @ z + real.d * u, _output_slopes(real, z, dz, u)
-            Xi = _nuisance_matrix(real, t, None, offset, False)
             if initial_state:
                 free, free_slopes = _free_slopes(real, t, _Steps.of(t))
-                Xi = np.concatenate([Xi, free], 1)
         else:
             forced = _forced(real, t, u, hold)
-            Xi = _nuisance_matrix(real, t, _Steps.of(t), offset, initial_state)
-        white = noise.whiten(np.column_stack([y - forced, Xi]))
-    if not np.isfinite(white).all():
+            if initial_state and real.order:
+                free = _free(real, t, _Steps.of(t))
+        # the nuisances' columns (offset, free responses) in one contiguous array: the
+        # projection's products then run on it as it is
+        Xi = np.empty((t.size, int(offset) + (0 if free is None else free.shape[1])))
+        if offset:
+            Xi[:, 0] = 1.0
+        if free is not None:
+            Xi[:, int(offset) :] = free
+        error, white = noise.whiten(y - forced), noise.whiten(Xi) if Xi.shape[1] else Xi
+    if not (np.isfinite(error).all() and np.isfinite(white).all()):
         return _Prediction(math.inf, t.size, Xi.shape[1])
-    projection = _Projection(white[:, 1:])
-    nu, eps = projection.fit(white[:, :1])
+    projection = _Projection(white)
+    nu, eps = projection.fit(error[:, None])
     nu, eps = nu[:, 0], eps[:, 0]
     rss = float(eps @ eps)
     if not (jacobian or keep):
