@@ -207,3 +207,20 @@ def test_coloured_noise_is_modelled_and_widens_the_intervals(tanks):
     )  # the output errors' sum of squares at the estimate
     with pytest.raises(ValueError, match="noise must be one of"):
         tanks.fit(t, u, y, noise="pink")
+
+
+def test_coloured_noise_intervals_take_students_t_for_the_noise_models_uncertainty(tanks):
+    """With an estimated AR(1) noise model (pole 0.9) k_se rests on the whitening's
+    low-frequency gain, itself uncertain: the intervals take Student's t quantile for k_se's
+    degrees of freedom (Satterthwaite's, from k_se's slope in the noise coefficient), wider
+    than the normal's; a white noise model keeps the normal's."""
+    t, u, y, _ = _record(9, size=401)
+    scale = np.std(y) / 10 * math.sqrt(1 - 0.9**2)
+    v = signal.lfilter([1.0], [1.0, -0.9], scale * np.random.default_rng(9).standard_normal(t.size))
+    found = _quiet(tanks.fit, t, u, y + v, hold="zoh", multistart=0, profile=None)
+    white = _quiet(tanks.fit, t, u, y + v, hold="zoh", multistart=0, profile=None, noise="white")
+    assert found.noise.kind == "AR(1)" and white.noise is None
+    quantile = (found.ci[:, 1] - found.ci[:, 0]) / (2 * found.k_se)
+    assert np.allclose((found.ci[:, 1] + found.ci[:, 0]) / 2, found.k)
+    assert np.all(quantile > 2.0) and np.all(quantile < 2.15)  # 2.03 to 2.08: nu 15 to 25
+    assert (white.ci[:, 1] - white.ci[:, 0]) / (2 * white.k_se) == pytest.approx(1.959963984540054)
