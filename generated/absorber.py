@@ -3809,6 +3809,29 @@ def _admissible(noise: NoiseModel) -> bool:
     return _is_stable(noise.ar) and _is_stable(noise.ma)
 
 
+def _damped_step(at, point: np.ndarray, rss: float, gram: np.ndarray, slope: np.ndarray,
+                 damping: float, box: np.ndarray, free: np.ndarray | None = None):
+    """One Levenberg-Marquardt step of the free entries of point (all when None; the
+    unknowns first, clipped to box): the least damping from `damping` up, by factors of 10
+    below 1e12, whose trial `at` (point -> (rss, gram, slope)) finds no costlier than rss;
+    (trial, at(trial), damping), or None where no damping does (a minimum, to rounding)."""
+    free = np.ones(point.size, dtype=bool) if free is None else free
+    G, g = gram[np.ix_(free, free)], slope[free]
+    scale = np.sqrt(np.maximum(np.diag(G), 1e-300))
+    G = G / np.outer(scale, scale)
+    count = len(box)
+    while damping < 1e12:
+        trial = point.copy()
+        trial[free] -= np.linalg.lstsq(G + damping * np.eye(G.shape[0]), g / scale,
+                                       rcond=None)[0] / scale  # fmt: skip
+        trial[:count] = np.clip(trial[:count], box[:, 0], box[:, 1])
+        new = at(trial)
+        if new[0] <= rss and new[1] is not None:
+            return trial, new, damping
+        damping *= 10.0
+    return None
+
+
 def _gauss_newton(Theta, records, k, noise: NoiseModel, bounds, settings, samples: int,
                   keep: bool = False, found=()):
     """Levenberg-Marquardt from (k, noise) to a local minimum of the prediction error:
@@ -3826,6 +3849,8 @@ def _gauss_newton(Theta, records, k, noise: NoiseModel, bounds, settings, sample
 
     def at(p):
         k_, noise_ = unpack(p)
+        if not _admissible(noise_):
+            return math.inf, None, None
         return _total(records.prediction(Theta, k_, noise_.filters, settings, True, keep))
 
     rss, gram, slope = at(point)
@@ -3842,18 +3867,10 @@ def _gauss_newton(Theta, records, k, noise: NoiseModel, bounds, settings, sample
             break  # Gauss-Newton's own step would lower the cost by a negligible amount (or
             # by rounding alone, on noise-free data, where the steps would wander for ever)
         iterations += 1
-        while damping < 1e12:
-            matrix = gram / np.outer(scale, scale) + damping * np.eye(len(point))
-            step = -np.linalg.lstsq(matrix, slope / scale, rcond=None)[0] / scale
-            trial = point + step
-            trial[:count] = np.clip(trial[:count], box[:, 0], box[:, 1])
-            if _admissible(unpack(trial)[1]):
-                new = at(trial)
-                if new[0] <= rss and new[1] is not None:
-                    break
-            damping *= 10.0
-        else:
+        taken = _damped_step(at, point, rss, gram, slope, damping, box)
+        if taken is None:
             break  # no step lowers the error: a minimum (to rounding)
+        trial, new, damping = taken
         moved = np.abs(trial - point) <= PEM_CONVERGED * np.maximum(np.abs(point), 1e-300)
         undamped = damping <= DAMPING
         point, (rss, gram, slope) = trial, new
@@ -4684,18 +4701,11 @@ class _Walk:
             newton = np.linalg.lstsq(G, g / scale, rcond=None)[0]
             if float(newton @ (g / scale)) <= PROFILE_SETTLED * self.variance:
                 break
-            while damping < 1e12:
-                trial = q.copy()
-                trial[free] -= np.linalg.lstsq(G + damping * np.eye(G.shape[0]), g / scale,
-                                               rcond=None)[0] / scale  # fmt: skip
-                trial[:count] = np.clip(trial[:count], self.box[:, 0], self.box[:, 1])
-                new = self._at(trial, True)
-                if new[0] <= rss and new[1] is not None:
-                    break
-                damping *= 10.0
-            else:
+            taken = _damped_step(lambda p: self._at(p, True), q, rss, gram, slope, damping,
+                                 self.box, free)  # fmt: skip
+            if taken is None:
                 break
-            q, (rss, gram, slope) = trial, new
+            q, (rss, gram, slope), damping = taken
             damping = max(damping / 10.0, 1e-12)
         return self._risen(q, rss)
 
