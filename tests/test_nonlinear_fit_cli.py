@@ -123,3 +123,27 @@ def test_many_records_of_a_nonlinear_model_go_through_mtt_batch(tmp_path):
     assert pooled.validation[0].comparison.fit_percent > 85
     with pytest.raises(mtt.MttError, match="unexpected parameter 'bogus'"):
         mtt.batch.fit_many(model, paths, jobs=1, bogus=1.0)
+
+
+def test_the_small_signal_estimator_is_derived_once_per_model_and_operating_point(monkeypatch):
+    """A second start on the same model and input level reuses the estimator (the steady
+    state, the linearisation, Theta, the generated module); another level derives its own."""
+    from mtt.api.nonlinear_fits import linearised_start
+
+    t, u, clean, _ = _record(3, high=10.0)
+    y = noisy(clean, 20, seed=3)
+    model = mtt.load(MODEL)
+    derived = []
+    linearise = type(model).linearise
+
+    def counted(self, *args, **at):
+        derived.append(at)
+        return linearise(self, *args, **at)
+
+    monkeypatch.setattr(type(model), "linearise", counted)
+    first = linearised_start(model, t, u, y, hold="zoh")
+    again = linearised_start(model, t, u, y, hold="zoh")
+    assert len(derived) == 1 and again.note == first.note
+    np.testing.assert_array_equal(again.k, first.k)
+    linearised_start(model, t, u + 1.0, y, hold="zoh")
+    assert len(derived) == 2 and derived[1]["u"] == pytest.approx(derived[0]["u"] + 1.0)

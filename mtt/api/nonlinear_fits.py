@@ -11,6 +11,7 @@ first start (then k0, the model file's values and a small multistart over the bo
 from __future__ import annotations
 
 import warnings
+import weakref
 from dataclasses import dataclass, replace
 from typing import TYPE_CHECKING
 
@@ -22,6 +23,30 @@ if TYPE_CHECKING:
     from mtt.api.model import Model
 
 BRANCHES = 4  # steady-state branches tried for the small-signal model, at most
+KEPT = 8  # small-signal estimators kept per model (operating points and branches)
+
+# model -> {(branch, input level): its small-signal estimator, or the MttError deriving it
+# raised}: what depends on the model and the operating point alone is derived once (the
+# steady state, the linearisation, Theta and the generated estimator: most of a repeated
+# start's time), the record's fit each time.
+_ESTIMATORS: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
+
+
+def _small_signal(model: Model, branch: int | None, level: float):
+    """The estimator of the model linearised at the steady state for the input `level`
+    (that branch of it), kept per model; the MttError deriving it raised, raised again."""
+    kept = _ESTIMATORS.setdefault(model, {})
+    key = (branch, level)
+    if key not in kept:
+        try:
+            kept[key] = model.linearise(branch=branch, u=level).estimator()
+        except MttError as error:
+            kept[key] = error
+        while len(kept) > KEPT:
+            del kept[next(iter(kept))]
+    if isinstance(kept[key], MttError):
+        raise kept[key]
+    return kept[key]
 
 
 @dataclass(frozen=True)
@@ -46,7 +71,7 @@ def linearised_start(model: Model, t, u, y, *, hold: str = "linear") -> Start:
         try:
             with warnings.catch_warnings():
                 warnings.simplefilter("ignore")
-                found = model.linearise(branch=branch, u=level).estimator().fit(*record, hold=hold)
+                found = _small_signal(model, branch, level).fit(*record, hold=hold)
         except MttError as error:
             if error.kind == "several_equilibria" and branch is None:
                 branches = tuple(range(1, BRANCHES + 1))
