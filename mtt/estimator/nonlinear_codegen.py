@@ -115,11 +115,22 @@ def _kernels(system: NonlinearStateSpace, kept: list[sympy.Symbol]) -> tuple[Fro
                 prelude.append((selector, selectors[selector]))
                 every.append((selector, selectors[selector]))
     prelude, every = tuple(prelude), tuple(every)
+    # the kinks frozen on given branches (arguments after the jumps' modes): a run of many
+    # sets at once keeps each set's kinks on their branches and checks their sides at the
+    # samples, so that one set's kink does not cut every set's steps
+    bent = [m for m, switch in zip(frozen.modes, frozen.switches, strict=True)
+            if switch.continuous]  # fmt: skip
+    selected = tuple((symbol, value) for symbol, value in prelude if symbol not in bent)
+    frozen_names = names | {m: m.name for m in bent}
+    kink_functions = [switch.function for switch in frozen.switches if switch.continuous]
     kernels = [
         kernel("rhs", arguments, list(f), names, prelude),
         kernel("output", arguments, [g], names, prelude),
         kernel("jacobian", arguments, first, names, prelude),
         kernel("switches", arguments, jumps, names, prelude),
+        kernel("kinks", arguments, kink_functions, names, prelude),
+        kernel("frozen_rhs", arguments + bent, list(f), frozen_names, selected),
+        kernel("frozen_jacobian", arguments + bent, list(f_x), frozen_names, selected),
         kernel("modes", base, held, names, every),
         kernel(
             "switch_gradient",
