@@ -223,6 +223,25 @@ def test_rows_of_parameters_are_simulated_as_one_at_a_time(tanks, signal):
     assert run.dy_dk.shape == (4, t.size, 3) and run.dx_dx0.shape == (4, t.size, 2, 2)
 
 
+def test_many_sets_cross_the_overflow_each_at_its_own_time(tanks):
+    """The stacked run keeps each set's overflow on its branch and runs a set found past
+    the rim again from its crossing: every set as if simulated alone, crossings in both
+    directions at times that differ from set to set."""
+    t, u = _record(n=1201, span=600.0, period=200, seed=3)
+    k = np.column_stack((np.linspace(0.42, 0.52, 8), np.full(8, 0.4), np.linspace(1.1, 1.0, 8)))
+    x0 = np.array([1.0, 1.0])
+    together = tanks.simulate(t, u, k, x0=x0, hold="zoh", rtol=1e-10, atol=1e-12)
+    levels = []
+    for row in range(8):
+        alone = tanks.sensitivities(t, u, k[row], x0=x0, hold="zoh", rtol=1e-10, atol=1e-12)
+        np.testing.assert_allclose(together[row], alone.y, rtol=0, atol=1e-8 * alone.y.max())
+        levels.append(alone.x[:, 0])
+    over = np.array(levels) > 3.0
+    assert (np.diff(over.astype(int), axis=1) == 1).any(axis=1).all()  # each set overflows
+    assert (np.diff(over.astype(int), axis=1) == -1).any(axis=1).all()  # and stops
+    assert len({int(np.argmax(row)) for row in over}) > 4  # at times of its own
+
+
 def test_kernels_equal_sympys_evaluation_of_the_equations(tanks, arm):
     rng = np.random.default_rng(1)
     for module, system, k in ((tanks, two_tanks(), TWO_TANKS_K), (arm, pendulum(), PENDULUM_K)):

@@ -272,3 +272,78 @@ def kernel(
         body.append(f"{symbol.name} = {text}")
     results = tuple(printer.doprint(e) for e in reduced)
     return Kernel(name, tuple(names[a] for a in arguments), tuple(body), results)
+
+
+def field_kernel(
+    name: str,
+    outer: list[sympy.Symbol],
+    inner: list[sympy.Symbol],
+    expressions: list[sympy.Expr],
+    names: dict[sympy.Symbol, str],
+    prelude: tuple[tuple[sympy.Symbol, sympy.Expr], ...] = (),
+) -> Kernel:
+    """A kernel of the `outer` arguments that returns (field,): field, a function of the
+    `inner` ones, computes `expressions`. Every subexpression free of the inner arguments
+    (a product of parameters, a branch's selector times a constant) is computed once, in
+    the outer function: an integrator that calls the field many times with the outer
+    arguments fixed (the parameters, the branches) then does only the rest each time."""
+    for expr in expressions:
+        for call in sympy.sympify(expr).atoms(sympy.Function):
+            if type(call).__name__ not in FUNCTIONS and call.func not in (SIDE, TIE):
+                raise KernelError(f"the function {type(call).__name__} cannot be simulated")
+    expressions = [shielded(e, prelude) for e in expressions]
+    varying = set(inner)
+    fixed = sympy.numbered_symbols("z")
+    table: dict[sympy.Expr, sympy.Symbol] = {}
+
+    def constant(e: sympy.Expr) -> sympy.Expr:
+        if e.is_Atom:
+            return e
+        if e not in table:
+            table[e] = next(fixed)
+        return table[e]
+
+    def hoist(e: sympy.Expr) -> sympy.Expr:
+        if e.is_Atom:
+            return e
+        if not e.free_symbols & varying:
+            return constant(e)
+        if e.is_Add or e.is_Mul:
+            free = [a for a in e.args if not a.free_symbols & varying]
+            bound = [hoist(a) for a in e.args if a.free_symbols & varying]
+            return e.func(*bound, *([constant(e.func(*free))] if free else []))
+        return e.func(*(hoist(a) for a in e.args))
+
+    replacements, reduced = sympy.cse(
+        list(expressions), symbols=sympy.numbered_symbols("w"), optimizations=None
+    )
+    inside = []  # the field's own common subexpressions, their fixed parts hoisted
+    for symbol, value in replacements:
+        if value.free_symbols & varying:
+            inside.append((symbol, hoist(value)))
+            varying.add(symbol)
+        else:
+            table[value] = symbol  # computed once, outside
+    reduced = [hoist(e) for e in reduced]
+    names = dict(names) | {symbol: symbol.name for symbol, _ in replacements}
+    names |= {symbol: symbol.name for symbol in table.values()}
+    printer = _Printer(names)
+    needed = set().union(*(sympy.sympify(e).free_symbols for e in [*table, *reduced]))
+    needed |= set().union(*(value.free_symbols for _, value in inside))
+    wanted = []
+    for symbol, value in reversed(prelude):  # the definitions used, and those they use
+        if symbol in needed:
+            wanted.append((symbol, value))
+            needed |= value.free_symbols
+    body = [f"{symbol.name} = {printer.doprint(value)}" for symbol, value in reversed(wanted)]
+    for symbol, _ in wanted:
+        names[symbol] = symbol.name
+    body += [f"{symbol.name} = {printer.doprint(value)}" for value, symbol in table.items()]
+    field = Kernel(
+        "field",
+        tuple(names[a] for a in inner),
+        tuple(f"{symbol.name} = {printer.doprint(value)}" for symbol, value in inside),
+        tuple(printer.doprint(e) for e in reduced),
+    )
+    body += field.source().splitlines()
+    return Kernel(name, tuple(names[a] for a in outer), tuple(body), ("field",))

@@ -20,7 +20,7 @@ import sympy
 
 from mtt.derivation.nonlinear import kept as kept_symbols
 from mtt.estimator.codegen import environment, load_source, module_path, shadows
-from mtt.estimator.kernels import SIDE, TIE, Frozen, KernelError, freeze, kernel
+from mtt.estimator.kernels import SIDE, TIE, Frozen, KernelError, field_kernel, freeze, kernel
 from mtt.estimator.literals import finite_float, is_name
 from mtt.estimator.rosenbrock import sensitivity_kernel, step_kernel
 from mtt.language.diagnostics import ModelError, Source, error
@@ -129,7 +129,9 @@ def _kernels(system: NonlinearStateSpace, kept: list[sympy.Symbol]) -> tuple[Fro
         kernel("jacobian", arguments, first, names, prelude),
         kernel("switches", arguments, jumps, names, prelude),
         kernel("kinks", arguments, kink_functions, names, prelude),
-        kernel("frozen_rhs", arguments + bent, list(f), frozen_names, selected),
+        field_kernel(
+            "frozen_field", arguments[n + 1 :] + bent, [*x, u], list(f), frozen_names, selected
+        ),  # fmt: skip
         kernel("frozen_jacobian", arguments + bent, list(f_x), frozen_names, selected),
         kernel("modes", base, held, names, every),
         kernel(
