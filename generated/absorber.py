@@ -3367,7 +3367,8 @@ def _compare(t, u, y, k, *, hold: str, known: dict) -> Comparison:
 # criterion (BIC) from the output-error residuals at the white-noise estimate (consistent
 # under coloured noise): each candidate is fitted to them (autoregressions by least squares,
 # ARMA models by Hannan and Rissanen's two stages from a long autoregression's innovations),
-# scored by its exact prediction errors, and the chosen one refined with k. Everything here
+# scored by its exact prediction errors, and the chosen one refined with k. noise="auto"
+# fits no ARMA model where the long autoregression shows none could be chosen. Everything here
 # works on sums over records (lagged products, sums of squares), so that records held
 # elsewhere answer with their own.
 
@@ -3502,11 +3503,16 @@ def _lagged_gram(columns: list[tuple[np.ndarray, int]], start: int) -> np.ndarra
     return np.triu(G) + np.triu(G, 1).T
 
 
-def _lag_gram(v: np.ndarray, lags: int) -> np.ndarray:
-    """The Gram matrix of the lag vectors [v_t .. v_(t-lags)], t >= lags (zeros if shorter)."""
+def _lag_grams(v: np.ndarray, lags: int) -> np.ndarray:
+    """The Gram matrices of the lag vectors [v_t .. v_(t-lags)] (v zero before the record):
+    over t >= lags (the autoregressions' fits; zeros if v is shorter) and over every t (from
+    rest: an autoregression's sum of squared prediction errors is d^T S d), stacked."""
+    rest = _lagged_gram([(v, j) for j in range(lags + 1)], 0)
     if v.size <= lags:
-        return np.zeros((lags + 1, lags + 1))
-    return _lagged_gram([(v, j) for j in range(lags + 1)], lags)
+        return np.stack([np.zeros((lags + 1, lags + 1)), rest])
+    where = np.arange(lags)[:, None] - np.arange(lags + 1)[None, :]  # the rows t < lags
+    rows = np.where(where >= 0, v[np.maximum(where, 0)], 0.0)
+    return np.stack([rest - rows.T @ rows, rest])
 
 
 def _regression(G: np.ndarray, columns: list[int]) -> np.ndarray:
@@ -3551,11 +3557,12 @@ def _bic(rss: float, count: int, parameters: int) -> float:
 
 def _noise_sums(v: np.ndarray, request: tuple):
     """One record's part of a noise-model sum over its output-error residuals v: ("lags",
-    L) the lag Gram matrix, ("innovations", long_ar, L) the innovation Gram matrix,
-    ("errors", [(ar, ma), ..]) each noise model's sum of squared prediction errors."""
+    L) the lag Gram matrices (`_lag_grams`), ("innovations", long_ar, L) the innovation
+    Gram matrix, ("errors", [(ar, ma), ..]) each noise model's sum of squared prediction
+    errors."""
     kind = request[0]
     if kind == "lags":
-        return _lag_gram(v, request[1])
+        return _lag_grams(v, request[1])
     if kind == "innovations":
         return _innovation_gram(v, request[1], request[2])
     return _prediction_sums(v, request[1])
@@ -3581,19 +3588,33 @@ def _prediction_sums(v: np.ndarray, models: list) -> np.ndarray:
 
 def _choose_noise(Theta, records, k, setting: str, settings, count: int) -> NoiseModel:
     """The noise model of least BIC among the orders of `setting`, fitted to the records'
-    output-error residuals at k (`count` samples in all)."""
+    output-error residuals at k (`count` samples in all). The autoregressions are fitted
+    and scored from the lag Gram matrices alone. With noise "auto", the ARMA candidates are
+    fitted and scored (a filtering each) only where one could be chosen: the long
+    autoregression, the innovations' stand-in, is the least error they reach, and where
+    even it, charged the least penalty of an ARMA model (two coefficients), scores no better
+    than the best autoregression (or white noise), none can."""
     orders = _noise_orders(setting)
-    moving = any(nc for _, nc in orders)
     cap = max(AR_CAP, MA_CAP)
-    lags = records.noise_sums(Theta, k, settings, ("lags", LONG_AR if moving else AR_CAP))
-    innovations = None
+    moving = [order for order in orders if order[1]]
+    lags, rest = records.noise_sums(Theta, k, settings, ("lags", LONG_AR if moving else AR_CAP))
+    finite = [order for order in orders if not order[1]]
+    models = dict(zip(finite, _candidates(lags, None, finite, cap), strict=True))
+    scores = {order: _bic(float(model.ar @ rest[: model.ar.size, : model.ar.size] @ model.ar),
+                          count, sum(order))
+              for order, model in models.items()}  # fmt: skip
     if moving:
         long_ar = np.r_[1.0, -_regression(lags, list(range(1, LONG_AR + 1)))]
+        if setting == "auto" and min(scores.values()) <= _bic(float(long_ar @ rest @ long_ar), count, 2):
+            moving = []
+    if moving:
         innovations = records.noise_sums(Theta, k, settings, ("innovations", long_ar, cap))
-    models = _candidates(lags, innovations, orders, cap)
-    errors = records.noise_sums(Theta, k, settings, ("errors", [m.filters for m in models]))
-    scores = {order: _bic(rss, count, sum(order)) for order, rss in zip(orders, errors, strict=True)}
-    best = min(range(len(orders)), key=lambda i: scores[orders[i]])
+        fitted = _candidates(None, innovations, moving, cap)
+        errors = records.noise_sums(Theta, k, settings, ("errors", [m.filters for m in fitted]))
+        models.update(zip(moving, fitted, strict=True))
+        scores.update({order: _bic(rss, count, sum(order))
+                       for order, rss in zip(moving, errors, strict=True)})  # fmt: skip
+    best = min(scores, key=scores.get)
     return replace(models[best], criterion=scores)
 
 
