@@ -3674,8 +3674,8 @@ class _Projection:
     integrator's free response) are left out; `rank` counts the rest."""
 
     def __init__(self, X: np.ndarray) -> None:
-        self.X = X
-        gram = X.T @ X
+        XT = np.ascontiguousarray(X.T)  # (columns, samples): the products below run on rows
+        gram = XT @ XT.T
         scale = np.sqrt(np.diag(gram))
         scale = np.where(scale > 0, scale, 1.0)
         gram = gram / np.outer(scale, scale)
@@ -3687,15 +3687,17 @@ class _Projection:
         size = np.abs(np.diag(R))
         self.kept = size > ROUNDING * X.shape[0] * max(size.max(initial=0.0), 1e-300)
         if not self.kept.all():
-            self.X = X[:, self.kept]
+            XT = XT[self.kept]
             scale = scale[self.kept]
-            R = np.linalg.qr(self.X / scale, mode="r")
-        self.R = R * scale  # of X itself: X = Q R
+            R = np.linalg.qr(XT.T / scale, mode="r")
+        self.XT = XT
         self.rank = int(self.kept.sum())
+        # R^-1 of X itself (X = Q R): a small triangular matrix, applied by products
+        self.inverse = (linalg.solve_triangular(R, np.eye(self.rank)) / scale[:, None] if self.rank
+                        else np.zeros((0, 0)))  # fmt: skip
 
     def _solve(self, W: np.ndarray) -> np.ndarray:
-        return linalg.solve_triangular(
-            self.R, linalg.solve_triangular(self.R, self.X.T @ W, trans="T"))
+        return self.inverse @ (self.inverse.T @ (self.XT @ W))
 
     def fit(self, W: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """(coefficients (columns of X, columns of W), W less X times them)."""
@@ -3703,10 +3705,9 @@ class _Projection:
         if not self.rank:
             return coefficients, W
         c = self._solve(W)
-        residual = W - self.X @ c
-        c += self._solve(residual)
+        c += self._solve(W - self.XT.T @ c)
         coefficients[self.kept] = c
-        return coefficients, W - self.X @ c
+        return coefficients, W - self.XT.T @ c
 
 
 def _lagged(x: np.ndarray, lags: int) -> np.ndarray:
@@ -3803,14 +3804,36 @@ def _independence(eps: np.ndarray, u: np.ndarray) -> float:
     independent of the input, whatever the input's colour (Soderstrom and Stoica, 1989);
     large when the model does not explain how the output answers the input."""
     lags = min(WHITENESS_LAGS, eps.size // 4)
-    e, v = eps - eps.mean(), u - u.mean()
+    if lags < 1:
+        return 0.0
+    v, inverse = _input_correlations(u, lags)
+    e = eps - eps.mean()
     power = math.sqrt((e @ e) * (v @ v))
-    if lags < 1 or power == 0:
+    if power == 0:
         return 0.0
     r = np.array([e[lag:] @ v[: v.size - lag] for lag in range(lags)]) / power
-    rho = np.array([v[lag:] @ v[: v.size - lag] for lag in range(lags)]) / (v @ v)
-    R = linalg.toeplitz(rho)
-    return float(eps.size * r @ np.linalg.lstsq(R, r, rcond=1e-8)[0])
+    return float(eps.size * r @ inverse @ r)
+
+
+_INPUTS: dict = {}  # id(u) -> (u, its sum, lags, v, R^+): the few inputs last asked about
+
+
+def _input_correlations(u: np.ndarray, lags: int) -> tuple[np.ndarray, np.ndarray]:
+    """(v, R^+): the input less its mean and the pseudo-inverse of its autocorrelations'
+    Toeplitz matrix (singular values below 1e-8 of the largest dropped), for `_independence`;
+    kept for the few inputs last asked about (a fit asks at every Gauss-Newton point)."""
+    total = float(np.add.reduce(u))
+    found = _INPUTS.get(id(u))
+    if found is None or found[0] is not u or found[1] != total or found[2] != lags:
+        v = u - u.mean()
+        power = v @ v
+        rho = (np.array([v[lag:] @ v[: v.size - lag] for lag in range(lags)]) / power if power
+               else np.zeros(lags))  # fmt: skip
+        inverse = np.linalg.pinv(linalg.toeplitz(rho), rcond=1e-8)
+        if len(_INPUTS) >= 8:
+            _INPUTS.pop(next(iter(_INPUTS)))
+        found = _INPUTS[id(u)] = (u, total, lags, v, inverse)
+    return found[3], found[4]
 
 
 def _total(parts: list[_Prediction]) -> tuple[float, np.ndarray | None, np.ndarray | None]:
