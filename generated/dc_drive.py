@@ -3681,7 +3681,7 @@ class _Projection:
 
     def __init__(self, X: np.ndarray) -> None:
         XT = np.ascontiguousarray(X.T)  # (columns, samples): the products below run on rows
-        gram = XT @ XT.T
+        gram = XT @ np.ascontiguousarray(X)  # (BLAS is slow on the other layouts of it)
         scale = np.sqrt(np.diag(gram))
         scale = np.where(scale > 0, scale, 1.0)
         gram = gram / np.outer(scale, scale)
