@@ -3463,18 +3463,18 @@ def _is_stable(c: np.ndarray) -> bool:
 
 
 def _within(c: np.ndarray, radius: float, strict: bool) -> bool | None:
-    """Whether the roots of c (in q^-1, c[0] = 1) of degree 1 or 2 lie within radius of the
-    origin (strict: inside), by the Schur-Cohn (Jury) conditions; None for other degrees
-    (np.roots then: an eigenvalue problem, dearer than the filter on a short record)."""
-    if c.size == 2:
-        size = abs(c[1]) / radius
-        return bool(size < 1 if strict else size <= 1)
-    if c.size == 3:
-        b1, b2 = c[1] / radius, c[2] / radius**2
-        if strict:
-            return bool(abs(b2) < 1 and abs(b1) < 1 + b2)
-        return bool(abs(b2) <= 1 and abs(b1) <= 1 + b2)
-    return None
+    """Whether the roots of c (in q^-1, c[0] = 1) lie within radius of the origin (strict:
+    inside), by the Schur-Cohn step-down recursion (all reflection coefficients of the
+    scaled polynomial below 1 in size); None where it cannot tell (a reflection coefficient
+    of size 1, or over 1 with strict=False: np.roots then, an eigenvalue problem dearer
+    than the filter on a short record)."""
+    a = c / radius ** np.arange(c.size)
+    for m in range(a.size - 1, 0, -1):
+        k = float(a[m])
+        if not abs(k) < 1:
+            return False if strict and abs(k) > 1 else None
+        a = (a[:m] - k * a[m:0:-1]) / (1.0 - k * k)
+    return True
 
 
 def _lagged_gram(columns: list[tuple[np.ndarray, int]], start: int) -> np.ndarray:
@@ -3520,8 +3520,19 @@ def _regression(G: np.ndarray, columns: list[int]) -> np.ndarray:
     """Least squares of Gram column 0 on the given columns, from the Gram matrix G."""
     if not columns:
         return np.zeros(0)
-    A = G[np.ix_(columns, columns)]
-    return np.linalg.lstsq(A, G[columns, 0], rcond=None)[0]
+    return _solved(G[np.ix_(columns, columns)], G[columns, 0])
+
+
+def _solved(A: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """The least-squares solution of A x = b for a small square A: by LU where A is regular
+    (lstsq's SVD costs ten times more on these), else lstsq's minimum-norm one."""
+    try:
+        found = np.linalg.solve(A, b)
+    except np.linalg.LinAlgError:
+        found = None
+    if found is None or not np.isfinite(found).all():
+        found = np.linalg.lstsq(A, b, rcond=None)[0]
+    return found
 
 
 def _innovation_gram(v: np.ndarray, long_ar: np.ndarray, lags: int) -> np.ndarray:
@@ -3867,8 +3878,7 @@ def _damped_step(at, point: np.ndarray, rss: float, gram: np.ndarray, slope: np.
     count = len(box)
     while damping < 1e12:
         trial = point.copy()
-        trial[free] -= np.linalg.lstsq(G + damping * np.eye(G.shape[0]), g / scale,
-                                       rcond=None)[0] / scale  # fmt: skip
+        trial[free] -= _solved(G + damping * np.eye(G.shape[0]), g / scale) / scale
         trial[:count] = np.clip(trial[:count], box[:, 0], box[:, 1])
         new = at(trial)
         if new[0] <= rss and new[1] is not None:
@@ -3907,7 +3917,7 @@ def _gauss_newton(Theta, records, k, noise: NoiseModel, bounds, settings, sample
     damping, iterations = DAMPING, 0
     while iterations < PEM_ITERATIONS:
         scale = np.sqrt(np.maximum(np.diag(gram), 1e-300))
-        newton = np.linalg.lstsq(gram / np.outer(scale, scale), slope / scale, rcond=None)[0]
+        newton = _solved(gram / np.outer(scale, scale), slope / scale)
         if float(newton @ (slope / scale)) <= SETTLED_COST * max(rss, rounding) / samples:
             break  # Gauss-Newton's own step would lower the cost by a negligible amount (or
             # by rounding alone, on noise-free data, where the steps would wander for ever)
@@ -4881,9 +4891,10 @@ def _summary(Theta, parts, k, coefficients, method, count) -> _Summary:
 
 def _finish(Theta, records, shapes, k, coefficients, *, method, c, iterations, bounds, beta,
             notes, automatic, settings, last_moments, keep, found=None, others=(),
-            uncertainty=True, summary=None, noise=None) -> Fit:  # fmt: skip
+            uncertainty=True, summary=None, noise=None, minima=None) -> Fit:  # fmt: skip
     """The Fit: validation at k (or the exact fit's `summary`), uncertainty, warnings (issued
-    as EstimationWarning) and the verdict."""
+    as EstimationWarning) and the verdict. minima: the criterion's (`_fit_minima`), where
+    the caller has them."""
     nuisances = settings["offset"] or settings["initial_state"]
     said, idle = _input_warnings(shapes, settings["hold"], nuisances)
     found_ = list(notes) + said
@@ -4891,7 +4902,7 @@ def _finish(Theta, records, shapes, k, coefficients, *, method, c, iterations, b
         step = _median_step(shapes)
         found_ += (_auto_filter_warnings(step, min(shape.span for shape in shapes)) if automatic
                    else _filter_warnings_at(c, step))  # fmt: skip
-    minima = _fit_minima(coefficients, bounds, found)
+    minima = _fit_minima(coefficients, bounds, found) if minima is None else minima
     common = dict(method=method, iterations=iterations, minima=minima, coefficients=coefficients,
                   bounds=bounds, filter=c, hold=settings["hold"], known=dict(settings["known"]))  # fmt: skip
     if not np.all(np.isfinite(k)):
@@ -5166,12 +5177,11 @@ def _distinct(points: list, point) -> bool:
     )  # fmt: skip
 
 
-def _starts(k_ls, coefficients, bounds, found, k0) -> list:
+def _starts(k_ls, coefficients, minima, found, k0) -> list:
     """(label, point) of each start of the exact descent: the polynomial cost's global
-    minimiser, its other local minima within the bounds that fit nearly as well (their cost
-    under FAR_MINIMUM times the global minimum's), and k0; each once, finite."""
+    minimiser, its other local minima within the bounds (`minima`) that fit nearly as well
+    (their cost under FAR_MINIMUM times the global minimum's), and k0; each once, finite."""
     starts = [("the least-squares estimate", k_ls)]
-    minima = _fit_minima(coefficients, bounds, found)
     if SCALAR:
         values = _value(coefficients, minima) if minima.size else np.zeros(0)
         lowest = float(_value(coefficients, np.float64(k_ls))) if np.isfinite(k_ls) else math.inf
@@ -5200,10 +5210,12 @@ def _exact_fit(Theta, records, shapes, k_ls, coefficients, total, found, *, c, k
     ends, notes = [], []
     box = np.reshape(bounds, (-1, 2))
     reached = []  # (k, rss, covariance) of the minima found
-    starts = _starts(k_ls, coefficients, bounds, found, k0)
+    minima = _fit_minima(coefficients, bounds, found)
+    starts = _starts(k_ls, coefficients, minima, found, k0)
     model = _model_point()  # the last resort, where every start is unstable
     common = dict(c=c, bounds=bounds, beta=0.0, automatic=automatic, settings=settings,
-                  last_moments=total, keep=keep, found=found, uncertainty=uncertainty)  # fmt: skip
+                  last_moments=total, keep=keep, found=found, uncertainty=uncertainty,
+                  minima=minima)  # fmt: skip
     if not starts:  # the polynomial has no minimum: its verdict (`_finish` says why)
         return _finish(Theta, records, shapes, k_ls, coefficients, method="pem", iterations=0,
                        notes=notes, **common)  # fmt: skip
