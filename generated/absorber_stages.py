@@ -3032,7 +3032,8 @@ def _realise(Theta: np.ndarray, k) -> _Realisation | None:
     Ac = np.eye(n, k=-1)
     Ac[0] = -monic[n - 1 :: -1]
     cc = rest[n - 1 :: -1]
-    balanced, (scale, _) = linalg.matrix_balance(Ac, permute=False, separate=True)
+    balanced, _, _, scale, _ = linalg.lapack.dgebal(Ac, scale=1, permute=0)  # (matrix_balance's
+    # own call: its wrapper costs fifty times the balancing of so small a matrix)
     F, Q = linalg.schur(balanced, output="real")
     V = scale[:, None] * Q  # x = V z
     Vinv = Q.T / scale[None, :]
@@ -3697,7 +3698,8 @@ class _Projection:
         scale = np.where(scale > 0, scale, 1.0)
         gram = gram / np.outer(scale, scale)
         R = None
-        if X.shape[1] and np.linalg.cond(gram) < GRAM_CONDITION:  # R from the Gram matrix
+        values = np.linalg.eigvalsh(gram) if X.shape[1] else np.zeros(0)  # (its condition)
+        if X.shape[1] and values[0] > 0 and values[-1] < GRAM_CONDITION * values[0]:  # R from it
             R = np.linalg.cholesky(gram).T
         if R is None or not np.isfinite(R).all():
             R = np.linalg.qr(X / scale, mode="r")
@@ -3710,8 +3712,7 @@ class _Projection:
         self.XT = XT
         self.rank = int(self.kept.sum())
         # R^-1 of X itself (X = Q R): a small triangular matrix, applied by products
-        self.inverse = (linalg.solve_triangular(R, np.eye(self.rank)) / scale[:, None] if self.rank
-                        else np.zeros((0, 0)))  # fmt: skip
+        self.inverse = np.linalg.inv(R) / scale[:, None] if self.rank else np.zeros((0, 0))
 
     def _solve(self, W: np.ndarray) -> np.ndarray:
         return self.inverse @ (self.inverse.T @ (self.XT @ W))
@@ -3808,10 +3809,28 @@ def _record_prediction(Theta, record, k, noise: NoiseModel, settings, jacobian: 
 def _predictor_stable(real: _Realisation) -> bool:
     """Whether G(s, k) is stable (an integrator, a pole at 0, is allowed): the output-error
     predictor of an unstable model diverges, and a noise model would read the divergence
-    as noise."""
-    poles = np.linalg.eigvals(real.F) if real.order else np.zeros(0)
+    as noise. The poles from F's diagonal blocks (its real Schur form)."""
+    poles = _schur_poles(real.F)
     size = float(np.abs(poles).max(initial=0.0))
     return bool((poles.real <= ROUNDING * max(size, 1e-300) * real.order).all())
+
+
+def _schur_poles(F: np.ndarray) -> np.ndarray:
+    """The eigenvalues of a quasi-triangular F from its 1 x 1 and 2 x 2 diagonal blocks
+    (np.linalg.eigvals where F is not one)."""
+    blocks = _diagonal_blocks(F) if F.shape[0] else []
+    if blocks is None:
+        return np.linalg.eigvals(F)
+    poles = []
+    for start, size in blocks:
+        if size == 1:
+            poles.append(complex(F[start, start]))
+            continue
+        (a, b), (c, d) = F[start : start + 2, start : start + 2]
+        half, mean = 0.5 * (a - d), 0.5 * (a + d)
+        root = np.sqrt(complex(half * half + b * c))
+        poles += [mean + root, mean - root]
+    return np.array(poles, dtype=complex)
 
 
 def _independence(eps: np.ndarray, u: np.ndarray) -> float:
