@@ -3150,17 +3150,35 @@ def _augmented_matrix(real: _Realisation) -> np.ndarray:
     return F
 
 
-def _free_slopes(real: _Realisation, t, steps) -> tuple[np.ndarray, np.ndarray]:
-    """The free responses h Phi(t_i - t_0) (samples, order) and their derivatives with
-    respect to the unknowns (unknowns, samples, order), from the augmented system: the row
-    [0, .., h, .., 0, dh_j] (h in the j-th place) times its Phi^i ends in d/dk_j (h Phi^i)."""
+def _free_slopes(real: _Realisation, t, steps, z0: np.ndarray) -> np.ndarray:
+    """The derivatives of the free response h Phi(t_i - t_0) z0 with respect to the unknowns
+    with z0 held, (samples, unknowns): the augmented system's output rows [0, .., h, .., 0,
+    dh_j] (h in the j-th place) along its free response from [0; z0]."""
     count, order = len(real.dd), real.order
-    H = np.zeros((count + 1, order * (count + 1)))
+    H = np.zeros((count, order * (count + 1)))
     for j in range(count):
         H[j, j * order : (j + 1) * order] = real.h
-    H[:, count * order :] = np.r_[real.dh, real.h[None]]
-    rows = _free_rows(_augmented_matrix(real), H, t, steps, order)
-    return rows[count], rows[:count]
+    H[:, count * order :] = real.dh
+    start = np.zeros(order * (count + 1))
+    start[count * order :] = z0
+    return _free_along(_augmented_matrix(real), H, t, steps, start).T
+
+
+def _free_along(F: np.ndarray, H: np.ndarray, t: np.ndarray, steps: "_Steps", start) -> np.ndarray:
+    """H Phi(t_i - t_0) start at the samples, (rows, samples): `_free_rows` for one initial
+    state, by the same blocks (regular sampling: R_(qL + j) = H Phi^j (Phi^L)^q start, the
+    block starts vectors), without the response to every state."""
+    if steps.index is not None:
+        return _free_rows(F, H, t, steps, F.shape[0]) @ start
+    Phi = linalg.expm(F * steps.values[0])
+    length = max(64, math.isqrt(t.size))
+    powers = _powers(Phi, length + 1)
+    count = -(-t.size // length)
+    starts = _powers(powers[length], count) @ start  # (count, size): (Phi^L)^q start
+    starts[np.abs(starts) < TINY] = 0.0
+    rows = H.shape[0]
+    blocks = (H @ powers[:length]).reshape(length * rows, -1) @ starts.T  # (L rows, count)
+    return blocks.reshape(length, rows, count).transpose(1, 2, 0).reshape(rows, -1)[:, : t.size]
 
 
 def _output_slopes(real: _Realisation, z, dz, u) -> np.ndarray:
@@ -3746,7 +3764,7 @@ def _record_prediction(Theta, record, k, noise: NoiseModel, settings, jacobian: 
             z, dz = _augmented(real, t, u, hold, np.zeros(real.order))
             forced, slopes = real.h @ z + real.d * u, _output_slopes(real, z, dz, u)
             if initial_state:
-                free, free_slopes = _free_slopes(real, t, _Steps.of(t))
+                free = _free(real, t, _Steps.of(t))
         else:
             forced = _forced(real, t, u, hold)
             if initial_state and real.order:
@@ -3776,7 +3794,8 @@ def _record_prediction(Theta, record, k, noise: NoiseModel, settings, jacobian: 
         if not augmented:
             output, psi = _sensitivities(real, t, u, hold, z0)
         elif initial_state:  # the free response's slopes with z0 held
-            output, psi = forced + Xi[:, int(offset) :] @ z0, slopes + (free_slopes @ z0).T
+            output = forced + Xi[:, int(offset) :] @ z0
+            psi = slopes + _free_slopes(real, t, _Steps.of(t), z0)
         else:
             output, psi = forced, slopes
     fitted = output + value
