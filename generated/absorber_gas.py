@@ -5212,11 +5212,13 @@ def _distinct(points: list, point) -> bool:
     )  # fmt: skip
 
 
-def _starts(k_ls, coefficients, minima, found, k0) -> list:
+def _starts(k_ls, coefficients, bounds, found, k0, minima=None) -> list:
     """(label, point) of each start of the exact descent: the polynomial cost's global
-    minimiser, its other local minima within the bounds (`minima`) that fit nearly as well
-    (their cost under FAR_MINIMUM times the global minimum's), and k0; each once, finite."""
+    minimiser, its other local minima within the bounds (`minima`, when the caller has them)
+    that fit nearly as well (their cost under FAR_MINIMUM times the global minimum's), and
+    k0; each once, finite."""
     starts = [("the least-squares estimate", k_ls)]
+    minima = _fit_minima(coefficients, bounds, found) if minima is None else minima
     if SCALAR:
         values = _value(coefficients, minima) if minima.size else np.zeros(0)
         lowest = float(_value(coefficients, np.float64(k_ls))) if np.isfinite(k_ls) else math.inf
@@ -5246,7 +5248,7 @@ def _exact_fit(Theta, records, shapes, k_ls, coefficients, total, found, *, c, k
     box = np.reshape(bounds, (-1, 2))
     reached = []  # (k, rss, covariance) of the minima found
     minima = _fit_minima(coefficients, bounds, found)
-    starts = _starts(k_ls, coefficients, minima, found, k0)
+    starts = _starts(k_ls, coefficients, bounds, found, k0, minima)
     model = _model_point()  # the last resort, where every start is unstable
     common = dict(c=c, bounds=bounds, beta=0.0, automatic=automatic, settings=settings,
                   last_moments=total, keep=keep, found=found, uncertainty=uncertainty,
