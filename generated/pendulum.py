@@ -1389,6 +1389,49 @@ def _evaluate(T: np.ndarray, x: np.ndarray) -> np.ndarray:
     return R
 
 
+_LETTERS = "abcdefghijlmopqrstuvwxyz"[: len(SHAPE)]  # the tensor's axes, for einsum (not n, k)
+_JET = (_LETTERS + "," + ",".join("n" + letter.upper() + letter for letter in _LETTERS)
+        + "->n" + _LETTERS.upper())  # fmt: skip
+_JET_GRADIENT = np.ravel_multi_index(tuple(_UNIT.T), (3,) * len(SHAPE))  # e_i among (3,)*p
+_JET_HESSIAN = np.array([np.ravel_multi_index(tuple((_UNIT[i] + _UNIT).T), (3,) * len(SHAPE))
+                         for i in range(len(UNKNOWNS))])  # e_i + e_j  # fmt: skip
+_VALUES = _LETTERS + "," + ",".join("nk" + letter for letter in _LETTERS) + "->nk"
+
+
+def _power_table(x: np.ndarray, size: int) -> np.ndarray:
+    """x^j, j = 0..size - 1, along a new last axis."""
+    out = np.empty(x.shape + (size,))
+    out[..., 0] = 1.0
+    for j in range(1, size):
+        np.multiply(out[..., j - 1], x, out=out[..., j])
+    return out
+
+
+def _jets(T: np.ndarray, x: np.ndarray):
+    """Value (n,), gradient (n, p) and Hessian (n, p, p) of one flattened tensor T at the
+    points x (n, p): the tensor contracted on each axis with the powers of that coordinate
+    and their first two derivatives, one product for all the points (what `_local_form` of
+    `_shift` gives, without the whole Taylor tensor)."""
+    rows = []
+    for axis, size in enumerate(SHAPE):
+        P = np.zeros((x.shape[0], 3, size))
+        powers = _power_table(x[:, axis], size)
+        j = np.arange(size, dtype=float)
+        P[:, 0] = powers
+        P[:, 1, 1:] = j[1:] * powers[:, :-1]
+        P[:, 2, 2:] = (j[2:] * j[1:-1]) * powers[:, :-2]
+        rows.append(P)
+    jets = np.einsum(_JET, T.reshape(SHAPE), *rows).reshape(x.shape[0], -1)
+    return jets[:, 0], jets[:, _JET_GRADIENT], jets[:, _JET_HESSIAN]
+
+
+def _values(T: np.ndarray, x: np.ndarray) -> np.ndarray:
+    """One flattened tensor T at the points x (n, trials, p): (n, trials), from the powers
+    of each coordinate (the arithmetic of `_jets`' values)."""
+    return np.einsum(_VALUES, T.reshape(SHAPE),
+                     *[_power_table(x[..., axis], size) for axis, size in enumerate(SHAPE)])  # fmt: skip
+
+
 def _lowest_curvature(H: np.ndarray) -> np.ndarray:
     """The smallest eigenvalue of each symmetric matrix H (..., p, p)."""
     return np.linalg.eigvalsh(0.5 * (H + np.swapaxes(H, -1, -2)))[..., 0]
@@ -1444,25 +1487,39 @@ def _second_derivatives(A: np.ndarray) -> np.ndarray:
                               -2) for i in range(len(SHAPE))], -3)  # fmt: skip
 
 
-def _curvature_floor_several(A: np.ndarray, reach: np.ndarray) -> np.ndarray:
-    """`_curvature_floor` for several unknowns: a lower bound of the smallest eigenvalue of
-    L^-1 H(centre + d) L^-T for every |d_i| <= reach_i, where H is J's Hessian and L L^T its
-    value at the centre of the Taylor tensors A (1 at d = 0): positive where H stays positive
-    definite over that box. The entries of L^-1 H L^-T are polynomials in d, enclosed over
-    the box by their Bernstein coefficients (see `_search`); the least eigenvalue of the
-    interval matrix is at least its middle's less the Frobenius norm of its radius."""
+def _normal_hessians(A: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """L^-1 H(centre + d) L^-T as flattened tensors in d (..., unknowns, unknowns,
+    prod(SHAPE)), H J's Hessian and L L^T its value at the centre of the Taylor tensors A
+    (the identity where that is not positive definite, then L = I), and whether it is:
+    the Hessian in coordinates where it is 1 at the centre, so that an enclosure of it over
+    a box is as tight for an ill-conditioned J as for a round one."""
     H = _local_form(A)[2]
     ok = _definite(H)
     L = np.linalg.cholesky(np.where(ok[..., None, None], H, np.eye(len(UNKNOWNS))))
     inverse = np.linalg.inv(L)
-    normal = np.einsum("...ki,...lj,...ijg->...klg", inverse, inverse, _second_derivatives(A))
-    reach = np.broadcast_to(reach, A.shape[:-1] + (len(UNKNOWNS),))[..., None, None, :]
-    B = _bernstein(_on_box(normal, -reach, 2.0 * reach).reshape(normal.shape[:-1] + SHAPE))
-    flat = B.reshape(normal.shape)
+    return np.einsum("...ki,...lj,...ijg->...klg", inverse, inverse, _second_derivatives(A)), ok
+
+
+def _curvature_enclosure(normal: np.ndarray, lo: np.ndarray, width: np.ndarray) -> np.ndarray:
+    """A lower bound of the smallest eigenvalue of the symmetric matrix polynomials `normal`
+    (..., unknowns, unknowns, prod(SHAPE); see `_normal_hessians`) over the boxes lo + width
+    [0, 1]^p (..., unknowns) about their centre: the entries enclosed over the box by their
+    Bernstein coefficients (see `_search`), the least eigenvalue of the interval matrix at
+    least its middle's less the Frobenius norm of its radius."""
+    U = _on_box(normal, lo[..., None, None, :], width[..., None, None, :])
+    flat = _bernstein(U.reshape(U.shape[:-1] + SHAPE)).reshape(U.shape)
     low, high = flat.min(-1), flat.max(-1)
     middle, radius = 0.5 * (low + high), 0.5 * (high - low)
-    floor = _lowest_curvature(middle) - np.sqrt((radius**2).sum((-1, -2)))
-    return np.where(ok, floor, -1.0)
+    return _lowest_curvature(middle) - np.sqrt((radius**2).sum((-1, -2)))
+
+
+def _curvature_floor_several(A: np.ndarray, reach: np.ndarray) -> np.ndarray:
+    """`_curvature_floor` for several unknowns: a lower bound of the smallest eigenvalue of
+    L^-1 H(centre + d) L^-T for every |d_i| <= reach_i (`_normal_hessians`, enclosed by
+    `_curvature_enclosure`): positive where H stays positive definite over that box."""
+    normal, ok = _normal_hessians(A)
+    reach = np.broadcast_to(reach, A.shape[:-1] + (len(UNKNOWNS),))
+    return np.where(ok, _curvature_enclosure(normal, -reach, 2.0 * reach), -1.0)
 
 
 # The same steps for one or several unknowns: what the engine and the search call ----------
@@ -1518,11 +1575,13 @@ def _curved(own: np.ndarray, before: np.ndarray, reach) -> np.ndarray:
 # no point of the box is lower than the best minimum by more than SEARCH_TOLERANCE of J's
 # largest value there (`certified`). The grid's descents report the other local minima.
 
-GRID_STARTS = 32  # starts of the descents, on a grid over the box (and any given)
+GRID_STARTS = 32  # at most this many starts of the descents from the grid (and any given)
+GRID_POINTS = 4096  # J evaluated on a grid of about this many points over the box
 SEARCH_TOLERANCE = 1e-10  # of J's largest value on the box: lower by less is as low
 MAX_BOXES = 4096  # sub-boxes kept at once: beyond, the search stops uncertified
 SAME_POINT = 1e-7  # minima closer than this (in the box's coordinates) are one
 _STEPS = 0.5 ** np.arange(20)  # the descents' trial step lengths
+_TRIALS = np.r_[0.0, _STEPS]  # with the point itself, evaluated alike
 
 
 @dataclass(frozen=True)
@@ -1571,17 +1630,43 @@ def _bernstein(U: np.ndarray) -> np.ndarray:
     return B
 
 
-def _halves(B: np.ndarray, axis: int) -> tuple[np.ndarray, np.ndarray]:
-    """The Bernstein coefficients (boxes, *SHAPE) of each box's lower and upper half along
-    `axis` (de Casteljau at 1/2)."""
-    work = np.moveaxis(B, 1 + axis, -1)
-    size = work.shape[-1]
-    lower, upper = np.empty_like(work), np.empty_like(work)
-    lower[..., 0], upper[..., -1] = work[..., 0], work[..., -1]
-    for r in range(1, size):
-        work = 0.5 * (work[..., :-1] + work[..., 1:])
-        lower[..., r], upper[..., size - 1 - r] = work[..., 0], work[..., -1]
-    return np.moveaxis(lower, -1, 1 + axis), np.moveaxis(upper, -1, 1 + axis)
+def _split_matrices(size: int) -> np.ndarray:
+    """(2, size, size): the Bernstein coefficients of the lower and the upper half of [0, 1]
+    from the whole's (de Casteljau at 1/2, as two matrices of dyadic rationals)."""
+    degree = size - 1
+    M = np.zeros((2, size, size))
+    for r in range(size):
+        for i in range(r + 1):
+            M[0, r, i] = math.comb(r, i) / 2.0**r
+        for i in range(r, size):
+            M[1, r, i] = math.comb(degree - r, i - r) / 2.0 ** (degree - r)
+    return M
+
+
+_SPLITS = [_split_matrices(size) for size in SHAPE]
+_CHILDREN = np.array(np.unravel_index(np.arange(2 ** len(SHAPE)), (2,) * len(SHAPE))).T  # halves' sides
+_CORNERS = np.ravel_multi_index(tuple((_CHILDREN * (np.array(SHAPE) - 1)).T), SHAPE)
+
+
+def _difference_rows() -> tuple[np.ndarray, np.ndarray]:
+    """D and where each axis' rows start: flat @ D.T are the differences of neighbouring
+    Bernstein coefficients along each axis in turn (J's slope's enclosure along it)."""
+    rows = [np.diff(np.eye(math.prod(SHAPE)).reshape((-1,) + SHAPE), axis=1 + axis)
+            .reshape(math.prod(SHAPE), -1).T for axis in range(len(SHAPE))]  # fmt: skip
+    return np.concatenate(rows), np.cumsum([0] + [len(r) for r in rows[:-1]])
+
+
+_DIFFERENCES, _DIFFERENCE_STARTS = _difference_rows()
+
+
+def _children(B: np.ndarray) -> np.ndarray:
+    """The Bernstein coefficients (2^p boxes, *SHAPE) of the 2^p halves of each box (boxes,
+    *SHAPE): halved along every axis, child c (a row of _CHILDREN: lower 0 or upper 1 along
+    each axis) of box b at c's place times the boxes plus b."""
+    for axis, M in enumerate(_SPLITS):  # B: (2,) * axis, boxes, *SHAPE
+        B = np.tensordot(M, B, axes=([2], [2 * axis + 1]))
+        B = np.moveaxis(B, [0, 1], [axis, 2 * axis + 2])
+    return B.reshape((-1,) + SHAPE)
 
 
 def _free_hessian(x: np.ndarray, gradient: np.ndarray, H: np.ndarray, strict: bool = True):
@@ -1600,24 +1685,28 @@ def _descend(U: np.ndarray, x: np.ndarray, iterations: int = 80) -> tuple[np.nda
     """Local minima of the polynomial U (flattened tensor, box coordinates) on [0, 1]^p from
     the starts x (starts, unknowns): Newton steps on the coordinates not held by a bound
     (the Hessian shifted where it is not positive definite), the longest of _STEPS that
-    lowers J, until no step does; then Newton on the gradient polishes what values cannot
-    resolve. Returns the distinct points reached and whether each is a local minimum (the
-    free Hessian positive definite, the projected gradient within rounding)."""
+    lowers J by more than the rounding of its value, until no step does; then Newton on
+    the gradient polishes what values cannot resolve. Returns the distinct points reached and whether each is a local minimum (the
+    free Hessian positive definite, the projected gradient within rounding). J and its
+    derivatives come from `_jets` and `_values`, one product for all the starts."""
     x = np.clip(x, 0.0, 1.0)
+    sizes = np.abs(U)
     active = np.arange(x.shape[0])
     for _ in range(iterations):
         here = x[active]
-        value, gradient, H = _local_form(_shift(U, here))
+        _, gradient, H = _jets(U, here)
         free, H = _free_hessian(here, gradient, H)
         lowest = _lowest_curvature(H)
         scale = np.abs(H).max((1, 2))
         shift = np.maximum(1e-9 * scale - lowest, 0.0) + (scale == 0)  # J flat here: I
         H = H + shift[:, None, None] * np.eye(x.shape[1])
         step = -np.linalg.solve(H, np.where(free, gradient, 0.0)[..., None])[..., 0]
-        trials = np.clip(here[:, None] + _STEPS[None, :, None] * step[:, None], 0.0, 1.0)
-        better = _evaluate(U, trials) < value[:, None]
+        trials = np.clip(here[:, None] + _TRIALS[None, :, None] * step[:, None], 0.0, 1.0)
+        values = _values(U, trials)  # the first: here (step 0)
+        rounding = ROUNDING * _values(sizes, here[:, None])  # of J's value here
+        better = values[:, 1:] < values[:, :1] - rounding
         found = better.any(1)
-        chosen = trials[np.arange(here.shape[0]), np.argmax(better, 1)]
+        chosen = trials[np.arange(here.shape[0]), 1 + np.argmax(better, 1)]
         moved = found & (np.abs(chosen - here).max(1) > 4 * EPS)
         x[active[found]] = chosen[found]
         active = active[moved]
@@ -1626,18 +1715,17 @@ def _descend(U: np.ndarray, x: np.ndarray, iterations: int = 80) -> tuple[np.nda
     order = np.lexsort(x.T[::-1])
     x = x[order]
     x = x[np.r_[True, np.abs(np.diff(x, axis=0)).max(1) > 1e-6]]  # starts that met
-    sizes = np.abs(U)
     minimum = np.zeros(x.shape[0], dtype=bool)
     for _ in range(3):  # polish: values no longer tell, the gradient still does
-        _, gradient, H = _local_form(_shift(U, x))
-        size = _local_form(_shift(sizes, x))[1]
+        _, gradient, H = _jets(U, x)
+        size = _jets(sizes, x)[1]
         free, H = _free_hessian(x, gradient, H, strict=False)
         slope = np.where(free, gradient, 0.0)
         minimum = _definite(H) & (np.abs(slope) <= 1e-6 * np.maximum(size, EPS)).all(1)
         safe = np.where(minimum[:, None, None], H, np.eye(x.shape[1]))
         step = -np.linalg.solve(safe, slope[..., None])[..., 0]
         polished = np.clip(x + np.where(minimum[:, None], step, 0.0), 0.0, 1.0)
-        after = _local_form(_shift(U, polished))[1]
+        after = _jets(U, polished)[1]
         keep = np.abs(np.where(free, after, 0.0)).max(1) < np.abs(slope).max(1)
         x = np.where(keep[:, None], polished, x)
     return x, minimum
@@ -1647,32 +1735,37 @@ def _basins(U: np.ndarray, points: np.ndarray) -> np.ndarray:
     """For each local minimum (box coordinates), the largest box about it, x +- 2^-j within
     [0, 1], on which an enclosure of J's Hessian is positive definite: J is convex there,
     so the minimum is its least value. (points, 2, unknowns): lower and upper corners; an
-    empty box (lower above upper) where none was found down to 2^-40."""
-    count, p = points.shape
+    empty box (lower above upper) where none was found down to 2^-40. The Hessian is
+    enclosed in the coordinates where it is 1 at the minimum (`_normal_hessians`): an
+    ill-conditioned J (a long valley) keeps a basin of the size of its own variation."""
     radii = 0.5 ** np.arange(1, 41)
     lo = np.clip(points[:, None] - radii[None, :, None], 0.0, 1.0)
     hi = np.clip(points[:, None] + radii[None, :, None], 0.0, 1.0)
-    B = _bernstein(_on_box(U, lo, hi - lo).reshape(lo.shape[:-1] + SHAPE))
-    # enclosures of the Hessian's entries, from differences of the Bernstein coefficients
-    # (in each sub-box's own coordinates: convexity does not depend on the scale)
-    low, high = np.empty((count, radii.size, p, p)), np.empty((count, radii.size, p, p))
-    for i in range(p):
-        for j in range(i, p):
-            degree_i, degree_j = SHAPE[i] - 1, SHAPE[j] - 1
-            if i == j:
-                D = degree_i * (degree_i - 1) * np.diff(B, 2, axis=2 + i)
-            else:
-                D = degree_i * degree_j * np.diff(np.diff(B, axis=2 + i), axis=2 + j)
-            flat = D.reshape(count, radii.size, -1)
-            low[:, :, i, j] = low[:, :, j, i] = flat.min(-1)
-            high[:, :, i, j] = high[:, :, j, i] = flat.max(-1)
-    middle, radius = 0.5 * (low + high), 0.5 * (high - low)
-    convex = _lowest_curvature(middle) > np.sqrt((radius**2).sum((-1, -2)))
+    normal = _normal_hessians(_shift(U, points))[0]
+    convex = _curvature_enclosure(normal[:, None], lo - points[:, None], hi - lo) > 0
     first = np.argmax(convex, 1)
+    count = points.shape[0]
     found = convex[np.arange(count), first]
     boxes = np.stack([lo[np.arange(count), first], hi[np.arange(count), first]], 1)
     boxes[~found] = [[1.0], [0.0]]
     return boxes
+
+
+def _grid_minima(U: np.ndarray, p: int) -> np.ndarray:
+    """The starts of the descents: the points of a grid over the box (about GRID_POINTS)
+    no higher than any neighbour, the lowest GRID_STARTS of them. Each local minimum wide
+    enough for the grid to see is near one, so the descents are short."""
+    side = max(3, int(GRID_POINTS ** (1 / p)))
+    grid = (np.arange(side) + 0.5) / side
+    x = np.stack(np.meshgrid(*[grid] * p, indexing="ij"), -1).reshape(-1, p)
+    values = _values(U, x[None])[0]
+    lowest = values.reshape((side,) * p)
+    for axis in range(p):  # the least over each point's 3^p neighbourhood, axis by axis
+        padded = np.moveaxis(np.pad(lowest, [(1, 1) if a == axis else (0, 0) for a in range(p)],
+                                    mode="edge"), axis, 0)  # fmt: skip
+        lowest = np.moveaxis(np.minimum(np.minimum(padded[:-2], padded[1:-1]), padded[2:]), 0, axis)
+    where = np.flatnonzero(values <= lowest.ravel())
+    return x[where[np.argsort(values[where], kind="stable")[:GRID_STARTS]]]
 
 
 def _search(T: np.ndarray, centre, box: np.ndarray, starts=()) -> _Minima:
@@ -1684,9 +1777,7 @@ def _search(T: np.ndarray, centre, box: np.ndarray, starts=()) -> _Minima:
     U = _on_box(T, lo - centre, width)
     B = _bernstein(U.reshape(SHAPE))
     tolerance = SEARCH_TOLERANCE * max(float(np.abs(B).max()), np.finfo(float).tiny)
-    side = max(3, int(round(GRID_STARTS ** (1 / p))))
-    grid = (np.arange(side) + 0.5) / side
-    x = np.stack(np.meshgrid(*[grid] * p, indexing="ij"), -1).reshape(-1, p)
+    x = _grid_minima(U, p)
     extra = np.reshape(np.asarray(starts, dtype=float), (-1, p))
     x = np.concatenate([x, (extra - lo) / width])
     points, values = np.zeros((0, p)), np.zeros(0)
@@ -1701,31 +1792,27 @@ def _search(T: np.ndarray, centre, box: np.ndarray, starts=()) -> _Minima:
 
     add(x)
     basins = _basins(U, points) if points.size else np.zeros((0, 2, p))
-    boxes, corners = B[None], np.zeros((1, p))  # Bernstein coefficients, lower corners
-    side_length = np.ones(p)
+    boxes, corners = B.reshape(1, -1), np.zeros((1, p))  # Bernstein coefficients, lower corners
+    side_length = 1.0
     certified = False
-    for round_ in range(60 * p):
+    for _ in range(60):
         best = values.min() if values.size else np.inf
-        flat = boxes.reshape(boxes.shape[0], -1)
-        low_corner = flat.min(1)  # the least Bernstein coefficient: a lower bound
-        corner_values = boxes[(slice(None), *np.ix_(*[[0, size - 1] for size in SHAPE]))]
-        corner_values = corner_values.reshape(boxes.shape[0], -1)
+        corner_values = boxes[:, _CORNERS]
         lowest = corner_values.min()
         if lowest < best - tolerance:  # a corner below every minimum found: descend from it
             which = np.argmin(corner_values.min(1))
-            offsets = np.array(np.unravel_index(np.argmin(corner_values[which]), (2,) * p))
+            offsets = _CHILDREN[np.argmin(corner_values[which])]
             before = points.shape[0]
             add((corners[which] + offsets * side_length)[None])
             if points.shape[0] > before:
                 basins = np.concatenate([basins, _basins(U, points[before:])])
                 continue
-        drop = low_corner > best - tolerance
-        margin = 64 * EPS * float(np.abs(flat).max())
-        for axis in range(p):
-            slopes = np.diff(boxes, axis=1 + axis).reshape(boxes.shape[0], -1)
-            rising, falling = (slopes > margin).all(1), (slopes < -margin).all(1)
-            drop |= rising & (corners[:, axis] > 0.0)
-            drop |= falling & (corners[:, axis] + side_length[axis] < 1.0)
+        drop = boxes.min(1) > best - tolerance  # the least coefficient: a lower bound
+        margin = 64 * EPS * float(np.abs(boxes).max())
+        slopes = boxes @ _DIFFERENCES.T
+        rising = np.minimum.reduceat(slopes, _DIFFERENCE_STARTS, axis=1) > margin
+        falling = np.maximum.reduceat(slopes, _DIFFERENCE_STARTS, axis=1) < -margin
+        drop |= (rising & (corners > 0.0)).any(1) | (falling & (corners + side_length < 1.0)).any(1)
         if basins.size:
             inside = ((corners[:, None] >= basins[None, :, 0])
                       & (corners[:, None] + side_length <= basins[None, :, 1])).all(-1)  # fmt: skip
@@ -1734,16 +1821,13 @@ def _search(T: np.ndarray, centre, box: np.ndarray, starts=()) -> _Minima:
         if boxes.shape[0] == 0:
             certified = True
             break
-        if boxes.shape[0] > MAX_BOXES // 2:
+        if boxes.shape[0] > MAX_BOXES >> p:
             break
-        axis = round_ % p
-        lower, upper = _halves(boxes, axis)
-        side_length[axis] *= 0.5
-        shifted = corners.copy()
-        shifted[:, axis] += side_length[axis]
-        boxes, corners = np.concatenate([lower, upper]), np.concatenate([corners, shifted])
+        side_length *= 0.5
+        boxes = _children(boxes.reshape((-1,) + SHAPE)).reshape(-1, boxes.shape[1])
+        corners = (corners[None] + side_length * _CHILDREN[:, None]).reshape(-1, p)
     if not certified and boxes.shape[0]:  # what is left: look there too
-        order = np.argsort(boxes.reshape(boxes.shape[0], -1).min(1))[:64]
+        order = np.argsort(boxes.min(1))[:64]
         add(corners[order] + 0.5 * side_length)
     order = np.argsort(values, kind="stable")
     return _Minima(lo + points[order] * width, values[order], certified)
