@@ -493,30 +493,41 @@ def _responses(A, B, t: np.ndarray, W: np.ndarray, holds: tuple[str, ...], out=N
 
 def _response_rows(A, B, t, W, holds, start=None, steps=None) -> np.ndarray | None:
     """`_responses`' states as rows, (len(W), order, len(t)), for regular sampling: in A's
-    balanced real Schur coordinates (`_schur_coordinates`), each signal by scalar
-    recursions (`_triangular`): no companion matrix is exponentiated, and the poles near
-    z = 1 at fine sampling stay on the diagonal. None where it does not apply (irregular
-    sampling, or an ill-conditioned complex pair)."""
+    balanced real Schur coordinates (`_schur_rows`), mapped back. None where it does not
+    apply (irregular sampling, or an ill-conditioned complex pair)."""
+    found = _schur_rows(A, B, t, W, holds, start, steps)
+    if found is None:
+        return None
+    V, _, rows = found
+    return rows if V is None else V @ rows
+
+
+def _schur_rows(A, B, t, W, holds, start=None, steps=None, out=None):
+    """(V, V^-1, rows): the states of x' = A x + B w for each row w of W (interpolated per
+    its hold), from rest (or `start`), at regular sampling, as rows (len(W), order, len(t))
+    in A's balanced real Schur coordinates z = V^-1 x (`_schur_coordinates`; V None: A's
+    own), all the signals by one set of scalar recursions (`_triangular`): no companion
+    matrix is exponentiated, and the poles near z = 1 at fine sampling stay on the
+    diagonal. rows is a view of `out` (len(W), order + 2, len(t)) if given, the samples of
+    W and the next ones below the states (`_triangular`'s layout). None where it does not
+    apply (irregular sampling, or an ill-conditioned complex pair)."""
     steps = _Steps.of(t) if steps is None and t.size > 1 else steps
     if steps is None or steps.index is not None or not A.shape[0] or not np.isfinite(A).all():
         return None
     F, V, inverse, blocks = _schur_coordinates(A)
     if blocks is None:
         return None
+    order = A.shape[0]
     g = inverse @ B
-    z0 = inverse @ (np.zeros(A.shape[0]) if start is None else start)
+    z0 = inverse @ (np.zeros(order) if start is None else start)
     maps = {hold: _transitions(F, g, steps.values, hold) for hold in set(holds)}
-    rows = np.empty((W.shape[0], A.shape[0], t.size))
-    for j, (w, hold) in enumerate(zip(W, holds, strict=True)):
-        Phi, Gamma = maps[hold]
-        drive = Gamma[0, 0][:, None] * w[:-1]
-        if hold == "linear":
-            drive += Gamma[0, 1][:, None] * w[1:]
-        if not _triangular(Phi[0], drive, z0, blocks, rows[j]):
-            return None
-        if V is not None:
-            rows[j] = V @ rows[j]
-    return rows
+    Gamma = np.stack([maps[hold][1][0] for hold in holds])  # (signals, [w_i, w_(i+1)], order)
+    out = np.empty((W.shape[0], order + 2, t.size)) if out is None else out
+    out[:, order] = W
+    out[:, order + 1, :-1], out[:, order + 1, -1] = W[:, 1:], W[:, -1]
+    if not _triangular(maps[holds[0]][0][0], Gamma, z0, blocks, out):
+        return None
+    return V, inverse, out[:, :order]
 
 
 def _schur_coordinates(A: np.ndarray):
@@ -2691,33 +2702,48 @@ def _filtered_moments(c, t, W, holds, needs, beta: float = 0.0) -> np.ndarray:
     """int e^(-beta (t_end - tau)) D D^T dtau over the record, D = the filtered derivatives
     of the signals W (one per row, each interpolated per its hold; see `_derivatives`).
     Exact for the holds (see above): the weight is e^(-beta (t_end - t_l)) at an interval's
-    start, times e^(beta tau) within it, which shifts G by beta/2."""
+    start, times e^(beta tau) within it, which shifts G by beta/2. At regular sampling the
+    filter states come in A's Schur coordinates with each interval's two samples
+    (`_schur_rows`, every signal at once), and their Gram matrix is mapped to v once."""
     order = c.size - 1
     A, B = _realisation(c)
     width = order + 2
-    # each interval's start [z; w; slope], per signal: a row per entry
-    V = np.empty((len(holds), width, t.size))
+    count = len(holds)
+    d = count * width
     steps = _Steps.of(t)
-    rows = _response_rows(A, B, t, W, holds, steps=steps)
-    V[:, :order] = rows if rows is not None else _responses(A, B, t, W, holds).transpose(0, 2, 1)
+    rows = np.empty((count, width, t.size))  # per signal and sample: [z; w_i; w_(i+1)]
+    found = _schur_rows(A, B, t, W, holds, steps=steps, out=rows)
+    to_v = np.eye(d)  # rows to v = [x; level; slope] per signal
+    if found is None:
+        rows[:, :order] = _responses(A, B, t, W, holds).transpose(0, 2, 1)
+        rows[:, order] = W
     h = steps.at(steps.values) if steps.index is not None else steps.values[0]
-    for j, (w, hold) in enumerate(zip(W, holds, strict=True)):
-        V[j, order] = w
-        V[j, order + 1, :-1] = np.diff(w) / h if hold == "linear" else 0.0
-    V = V.reshape(-1, t.size)[:, :-1]  # the last sample starts no interval
+    for j, hold in enumerate(holds):
+        at = j * width
+        if found is not None and found[0] is not None:
+            to_v[at : at + order, at : at + order] = found[0]
+        if steps.index is not None:  # the slope itself: its interval's own step
+            rows[j, order + 1] = 0.0
+            if hold == "linear":
+                rows[j, order + 1, :-1] = np.diff(W[j]) / h
+        else:
+            to_v[at + order + 1, at + order + 1] = 0.0
+            if hold == "linear":
+                to_v[at + order + 1, at + order : at + width] = [-1.0 / h, 1.0 / h]
+            if found is None:
+                rows[j, order + 1, :-1], rows[j, order + 1, -1] = W[j, 1:], W[j, -1]
+    X = rows.reshape(d, t.size)[:, :-1]  # the last sample starts no interval
     if beta:
-        V = V * np.exp(-0.5 * beta * (t[-1] - t[:-1]))
-    G = linalg.block_diag(*[_drift(A, B)] * len(holds))
-    d = G.shape[0]
-    G += 0.5 * beta * np.eye(d)
+        X = X * np.exp(-0.5 * beta * (t[-1] - t[:-1]))
+    G = linalg.block_diag(*[_drift(A, B)] * count) + 0.5 * beta * np.eye(d)
     block = np.zeros((steps.values.size, 2 * d, 2 * d))
     block[:, :d, :d] = -G
     block[:, d:, d:] = G.T
     if steps.index is None:
-        block[0, :d, d:] = V @ V.T
+        block[0, :d, d:] = to_v @ (X @ X.T) @ to_v.T
     else:  # one Gram matrix per distinct step
-        for lo in range(0, V.shape[1], 4096):
-            part = V[:, lo : lo + 4096].T
+        for lo in range(0, X.shape[1], 4096):
+            part = X[:, lo : lo + 4096].T
             outer = part[:, :, None] * part[:, None, :]
             np.add.at(block[:, :d, d:], steps.index[lo : lo + 4096], outer)
     E = linalg.expm(block * steps.values[:, None, None])
@@ -3353,44 +3379,50 @@ def _pair_mode(P: np.ndarray):
     return value, vector[:, None], row
 
 
-def _triangular(Phi: np.ndarray, drive: np.ndarray, z0: np.ndarray, blocks, out) -> bool:
-    """States z_0..z_N (into out, (order, N + 1): a row per state) of z_(i+1) = Phi z_i +
-    drive_i (drive (order, N), a row per state), Phi upper
-    quasi-triangular with the diagonal `blocks`; False (out undefined) when a 2 x 2 block is
-    not a well-conditioned complex pair (the general `_propagate` then).
+def _triangular(Phi: np.ndarray, Gamma: np.ndarray, z0: np.ndarray, blocks, out: np.ndarray) -> bool:
+    """States z_0..z_N of z_(i+1) = Phi z_i + Gamma[j]^T [w_i, w_(i+1)] for each signal j
+    (Gamma (signals, 2, order)) from z0, Phi upper quasi-triangular with the diagonal
+    `blocks`, written into the first `order` rows of out (signals, order + 2, N + 1), whose
+    last two rows hold each signal's samples w_0..w_N and w_1..w_N (the last repeated);
+    False (out undefined) when a 2 x 2 block is not a well-conditioned complex pair (the
+    general `_propagate` then). Each block's drive, from the states below it and the
+    samples, is one product with those rows, and its recursion one call for all signals.
 
     In chunks of TRIANGULAR_CHUNK samples, between which states below TINY are 0: a
     recursion that decays into subnormal numbers can stay there (the smallest one times
     0.9 rounds to itself), and each step on them is a hundred times slower."""
     if not np.isfinite(Phi).all():
         return False
-    modes = []
-    for start, size in blocks:
-        if size == 2:
-            mode = _pair_mode(Phi[start : start + 2, start : start + 2])
-            if mode is None:
-                return False
-            modes.append(mode)
-        else:
-            modes.append(None)
-    out[:, 0] = z0
-    count = out.shape[1] - 1
-    for lo in range(0, count, TRIANGULAR_CHUNK):
-        hi = min(count, lo + TRIANGULAR_CHUNK)
-        state = out[:, lo]
+    order, count = Phi.shape[0], Gamma.shape[0]
+    steps = []  # per block (from the last up): its mode (None for a real pole), drive weights
+    for start, size in blocks[::-1]:
+        end = start + size
+        weights = np.concatenate([np.broadcast_to(Phi[start:end, end:], (count, size, order - end)),
+                                  np.swapaxes(Gamma[:, :, start:end], 1, 2)], 2)  # fmt: skip
+        if size == 1:
+            steps.append((start, end, None, weights))
+            continue
+        mode = _pair_mode(Phi[start:end, start:end])
+        if mode is None:
+            return False
+        steps.append((start, end, mode, mode[2] @ weights))  # the pair's first mode's drive
+    out[:, :order, 0] = z0
+    for lo in range(0, out.shape[2] - 1, TRIANGULAR_CHUNK):
+        hi = min(out.shape[2] - 1, lo + TRIANGULAR_CHUNK)
+        state = out[:, :order, lo]
         state[np.abs(state) < TINY] = 0.0
-        for (start, size), mode in zip(blocks[::-1], modes[::-1], strict=True):
-            end = start + size
-            w = drive[start:end, lo:hi]
-            if end < Phi.shape[0]:
-                w = w + Phi[start:end, end:] @ out[end:, lo:hi]
+        for start, end, mode, weights in steps:
+            below = out[:, end:, lo:hi]  # the states below the block, then the samples
             if mode is None:
                 a = Phi[start, start]
-                out[start, lo + 1 : hi + 1] = signal.lfilter([1.0], [1.0, -a], w[0], zi=[a * state[start]])[0]
+                w = (weights @ below)[:, 0]
+                out[:, start, lo + 1 : hi + 1] = signal.lfilter(
+                    [1.0], [1.0, -a], w, zi=a * state[:, start, None])[0]  # fmt: skip
                 continue
-            value, vector, row = mode  # the pair's first mode; the second its conjugate
-            x = signal.lfilter([1.0], [1.0, -value], row @ w, zi=[value * (row @ state[start:end])])[0]
-            out[start:end, lo + 1 : hi + 1] = 2.0 * (vector * x).real
+            value, vector, row = mode  # the second mode is the first's conjugate
+            w = (weights.real[:, None] @ below)[:, 0] + 1j * (weights.imag[:, None] @ below)[:, 0]
+            x = signal.lfilter([1.0], [1.0, -value], w, zi=value * (state[:, start:end] @ row)[:, None])[0]
+            out[:, start:end, lo + 1 : hi + 1] = 2.0 * (vector * x[:, None]).real
     return True
 
 
@@ -5000,7 +5032,8 @@ def _summary(Theta, parts, k, coefficients, method, count) -> _Summary:
     variances = np.diag(covariance)
     return _Summary(
         k_se=np.sqrt(np.where(variances >= 0, variances, math.nan)), covariance=covariance,
-        identifiable=bool(np.all(np.linalg.eigvalsh(information) > 0)), rss=rss,
+        identifiable=_definite(information / np.outer(*[np.sqrt(np.abs(np.diag(information)))] * 2))
+        and bool(np.all(np.diag(information) > 0)), rss=rss,
         variance=variance, count=count, dof=dof,
         deviations=sum(part.deviations for part in parts),
         shares=np.diag(information) / np.diag(sum(part.free_information for part in parts)),
