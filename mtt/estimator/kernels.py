@@ -238,6 +238,24 @@ class Kernel:
         return "\n".join(lines)
 
 
+def _check_functions(expressions: list[sympy.Expr]) -> None:
+    """A KernelError for a function the generated module cannot evaluate."""
+    for expr in expressions:
+        for call in sympy.sympify(expr).atoms(sympy.Function):
+            if type(call).__name__ not in FUNCTIONS and call.func not in (SIDE, TIE):
+                raise KernelError(f"the function {type(call).__name__} cannot be simulated")
+
+
+def _used(prelude: tuple[tuple[sympy.Symbol, sympy.Expr], ...], needed: set) -> list:
+    """The prelude's definitions that `needed` uses, and those they use, last first."""
+    wanted = []
+    for symbol, value in reversed(prelude):
+        if symbol in needed:
+            wanted.append((symbol, value))
+            needed |= value.free_symbols
+    return wanted
+
+
 def kernel(
     name: str,
     arguments: list[sympy.Symbol],
@@ -247,10 +265,7 @@ def kernel(
 ) -> Kernel:
     """The kernel computing `expressions` from `arguments` (all named in `names`), after
     the `prelude`'s definitions (symbol = expression of the arguments) that it uses."""
-    for expr in expressions:
-        for call in sympy.sympify(expr).atoms(sympy.Function):
-            if type(call).__name__ not in FUNCTIONS and call.func not in (SIDE, TIE):
-                raise KernelError(f"the function {type(call).__name__} cannot be simulated")
+    _check_functions(expressions)
     expressions = [shielded(e, prelude) for e in expressions]
     temporaries = sympy.numbered_symbols("w")
     replacements, reduced = sympy.cse(list(expressions), symbols=temporaries, optimizations=None)
@@ -258,11 +273,7 @@ def kernel(
     body = []
     printer = _Printer(names)
     needed = set().union(*(sympy.sympify(e).free_symbols for e in expressions))
-    wanted = []
-    for symbol, value in reversed(prelude):  # the definitions used, and those they use
-        if symbol in needed:
-            wanted.append((symbol, value))
-            needed |= value.free_symbols
+    wanted = _used(prelude, needed)
     for symbol, value in reversed(wanted):
         names[symbol] = symbol.name
         body.append(f"{symbol.name} = {printer.doprint(value)}")
@@ -287,10 +298,7 @@ def field_kernel(
     (a product of parameters, a branch's selector times a constant) is computed once, in
     the outer function: an integrator that calls the field many times with the outer
     arguments fixed (the parameters, the branches) then does only the rest each time."""
-    for expr in expressions:
-        for call in sympy.sympify(expr).atoms(sympy.Function):
-            if type(call).__name__ not in FUNCTIONS and call.func not in (SIDE, TIE):
-                raise KernelError(f"the function {type(call).__name__} cannot be simulated")
+    _check_functions(expressions)
     expressions = [shielded(e, prelude) for e in expressions]
     varying = set(inner)
     fixed = sympy.numbered_symbols("z")
@@ -330,11 +338,7 @@ def field_kernel(
     printer = _Printer(names)
     needed = set().union(*(sympy.sympify(e).free_symbols for e in [*table, *reduced]))
     needed |= set().union(*(value.free_symbols for _, value in inside))
-    wanted = []
-    for symbol, value in reversed(prelude):  # the definitions used, and those they use
-        if symbol in needed:
-            wanted.append((symbol, value))
-            needed |= value.free_symbols
+    wanted = _used(prelude, needed)
     body = [f"{symbol.name} = {printer.doprint(value)}" for symbol, value in reversed(wanted)]
     for symbol, _ in wanted:
         names[symbol] = symbol.name
