@@ -3980,16 +3980,16 @@ def _independence(eps: np.ndarray, u: np.ndarray) -> float:
     return float(eps.size * r @ inverse @ r)
 
 
-_INPUTS: dict = {}  # id(u) -> (u, its sum, lags, v, R^+): the few inputs last asked about
+_INPUTS: dict = {}  # id(u) -> (a copy of u, lags, v, R^+): the few inputs last asked about
 
 
 def _input_correlations(u: np.ndarray, lags: int) -> tuple[np.ndarray, np.ndarray]:
     """(v, R^+): the input less its mean and the pseudo-inverse of its autocorrelations'
     Toeplitz matrix (singular values below 1e-8 of the largest dropped), for `_independence`;
-    kept for the few inputs last asked about (a fit asks at every Gauss-Newton point)."""
-    total = float(np.add.reduce(u))
+    kept for the few inputs last asked about (a fit asks at every Gauss-Newton point), by
+    their values: an input changed in place is not mistaken for the one it was."""
     found = _INPUTS.get(id(u))
-    if found is None or found[0] is not u or found[1] != total or found[2] != lags:
+    if found is None or found[1] != lags or not np.array_equal(found[0], u):
         v = u - u.mean()
         power = v @ v
         rho = (np.array([v[lag:] @ v[: v.size - lag] for lag in range(lags)]) / power if power
@@ -3997,8 +3997,8 @@ def _input_correlations(u: np.ndarray, lags: int) -> tuple[np.ndarray, np.ndarra
         inverse = np.linalg.pinv(linalg.toeplitz(rho), rcond=1e-8)
         if len(_INPUTS) >= 8:
             _INPUTS.pop(next(iter(_INPUTS)))
-        found = _INPUTS[id(u)] = (u, total, lags, v, inverse)
-    return found[3], found[4]
+        found = _INPUTS[id(u)] = (u.copy(), lags, v, inverse)
+    return found[2], found[3]
 
 
 def _total(parts: list[_Prediction]) -> tuple[float, np.ndarray | None, np.ndarray | None]:

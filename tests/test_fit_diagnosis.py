@@ -225,3 +225,15 @@ def test_errors_in_one_of_several_files_name_the_file(tmp_path, monkeypatch, cap
     status = main(["estimate", DC_DRIVE, "--data", "late.csv",
                    "--k0", "1"])  # fmt: skip
     assert status == 2 and "late.csv:5: the times (column 't') must" in capsys.readouterr().err
+
+
+def test_the_independence_check_reads_an_input_changed_in_place_afresh(dc_drive):
+    """The fit keeps the input's autocorrelations between its points: an input array
+    changed in place (here reversed, so its sum and mean stay) must not be taken for the
+    one it was."""
+    rng = np.random.default_rng(3)
+    u, errors = np.sin(0.05 * np.arange(400.0)) + 0.1 * np.arange(400.0) % 1, rng.normal(size=400)
+    before = dc_drive._independence(errors, u)
+    u[:] = u[::-1].copy()
+    assert dc_drive._independence(errors, u) == dc_drive._independence(errors, u.copy())
+    assert dc_drive._independence(errors, u) != before
