@@ -3790,6 +3790,13 @@ RESIDUAL_ROUNDING = 1e-10  # residuals below this share of the output's spread (
 DAMPING = 1e-4  # the first Levenberg-Marquardt damping, relative to J^T J's diagonal
 GRAM_CONDITION = 1e8  # the nuisances' scaled Gram matrix factorised directly below this
 SAME_BASIN = 3.0  # a descent this many standard errors from a minimum found ends there
+UPDATE_REACH = 0.01  # one unknown: the Jacobian at a point this near (relative) to the last
+# one computed in full is carried from it (`_updated_slopes`: the forced response alone, not
+# the augmented system with twice its states) when the record determined k there to NARROW
+# of |k| (the exact cost quadratic on that scale, as `_profile` takes it) ..
+UPDATE_CHANGE = 0.01  # .. and the Jacobian's first-order change from there, projected, is
+# under this share of it: the second-order error left, about its square (1e-4), moves k_se
+# by under 1e-4 relative (measured on the speed records: 1e-9 to 1e-5)
 
 
 @dataclass(frozen=True)
@@ -3869,28 +3876,49 @@ def _lagged(x: np.ndarray, lags: int) -> np.ndarray:
     return out
 
 
+@dataclass(frozen=True)
+class _Basis:
+    """A record's output from rest at a point k where its Jacobian was computed in full,
+    and its derivative by k (samples, 1): what `_prediction` needs to carry the Jacobian to
+    a nearby point (`_updated_slopes`)."""
+
+    k: float
+    forced: np.ndarray
+    slopes: np.ndarray
+
+
 def _record_prediction(Theta, record, k, noise: NoiseModel, settings, jacobian: bool,
                        keep: bool = False) -> _Prediction:  # fmt: skip
     """The record's prediction errors at k with the noise model: their sum of squares
     alone, or (`jacobian`) with the Gauss-Newton sums (derivatives by k, then by D's and C's
     coefficients) and the record's figures, or (`keep`) with its fitted output."""
+    return _prediction(Theta, record, k, noise, settings, jacobian, keep)[0]
+
+
+def _prediction(Theta, record, k, noise: NoiseModel, settings, jacobian: bool, keep: bool = False,
+                basis: _Basis | None = None) -> tuple[_Prediction, _Basis | None]:  # fmt: skip
+    """`_record_prediction`, and the record's basis for later updates: with `jacobian`, the
+    Jacobian by k is carried from `basis` (the record's outputs at a point near k) by
+    `_updated_slopes` where that is accurate, else computed in full, which gives the new
+    basis (one unknown; otherwise None). The basis is returned as it is when not replaced."""
     t, u, y = record
     offset, initial_state, hold = settings["offset"], settings["initial_state"], settings["hold"]
     real = _realise(Theta, k)
     if real is None or not _predictor_stable(real):
-        return _Prediction(math.inf, t.size, 0)
-    augmented = jacobian and real.order  # the output and its slopes from one recursion
+        return _Prediction(math.inf, t.size, 0), basis
+    steps = _Steps.of(t) if real.order else None
+    update = (jacobian and SCALAR and real.order and basis is not None and basis.k != k
+              and abs(k - basis.k) <= UPDATE_REACH * abs(basis.k))  # fmt: skip
+    augmented = jacobian and real.order and not update  # the output and its slopes at once
     free = None  # the free responses (initial state), a column per state
     with np.errstate(all="ignore"):
         if augmented:
             z, dz = _augmented(real, t, u, hold, np.zeros(real.order))
             forced, slopes = real.h @ z + real.d * u, _output_slopes(real, z, dz, u)
-            if initial_state:
-                free = _free(real, t, _Steps.of(t))
         else:
             forced = _forced(real, t, u, hold)
-            if initial_state and real.order:
-                free = _free(real, t, _Steps.of(t))
+        if initial_state and real.order:
+            free = _free(real, t, steps)
         # the nuisances' columns (offset, free responses) in one contiguous array: the
         # projection's products then run on it as it is
         Xi = np.empty((t.size, int(offset) + (0 if free is None else free.shape[1])))
@@ -3900,24 +3928,28 @@ def _record_prediction(Theta, record, k, noise: NoiseModel, settings, jacobian: 
             Xi[:, int(offset) :] = free
         error, white = noise.whiten(y - forced), noise.whiten(Xi) if Xi.shape[1] else Xi
     if not (np.isfinite(error).all() and np.isfinite(white).all()):
-        return _Prediction(math.inf, t.size, Xi.shape[1])
+        return _Prediction(math.inf, t.size, Xi.shape[1]), basis
     projection = _Projection(white)
     nu, eps = projection.fit(error[:, None])
     nu, eps = nu[:, 0], eps[:, 0]
     rss = float(eps @ eps)
     if not (jacobian or keep):
-        return _Prediction(rss, t.size, projection.rank, deviations=t.size * float(np.var(y)))
+        return _Prediction(rss, t.size, projection.rank, deviations=t.size * float(np.var(y))), basis
     value, z0 = _nuisance_values(nu, real, offset, initial_state)
     if not jacobian:
         fitted = forced + Xi @ nu
         return _Prediction(rss, t.size, projection.rank, offset=value, state=real.V @ z0,
-                           fitted=fitted, residuals=y - fitted)  # fmt: skip
+                           fitted=fitted, residuals=y - fitted), basis  # fmt: skip
+    held = forced + Xi[:, int(offset) :] @ z0 if free is not None else forced  # z0's response
+    psi = change = None
     with np.errstate(all="ignore"):
-        if not augmented:
+        if update:  # (the free response's slopes along z0 in full: they need no recursion)
+            psi, change = _updated_slopes(basis, k, forced)
+            output, psi = held, psi if free is None else psi + _free_slopes(real, t, steps, z0)
+        elif not augmented:
             output, psi = _sensitivities(real, t, u, hold, z0)
-        elif initial_state:  # the free response's slopes with z0 held
-            output = forced + Xi[:, int(offset) :] @ z0
-            psi = slopes + _free_slopes(real, t, _Steps.of(t), z0)
+        elif free is not None:  # the free response's slopes with z0 held
+            output, psi = held, slopes + _free_slopes(real, t, steps, z0)
         else:
             output, psi = forced, slopes
     fitted = output + value
@@ -3928,16 +3960,38 @@ def _record_prediction(Theta, record, k, noise: NoiseModel, settings, jacobian: 
         columns.append(_lagged(signal.lfilter([1.0], noise.ma, residuals), na))
     if nc:
         columns.append(-_lagged(signal.lfilter([1.0], noise.ma, eps), nc))
+    if change is not None:
+        columns.append(noise.whiten(change))
     J = np.concatenate(columns, 1)
     free = J[:, : len(UNKNOWNS)].T @ J[:, : len(UNKNOWNS)]
     J = projection.fit(J)[1]
+    if change is not None:
+        J, moved = J[:, :-1], J[:, -1]
+        if not moved @ moved <= UPDATE_CHANGE**2 * (J[:, 0] @ J[:, 0]):  # too far: in full
+            return _prediction(Theta, record, k, noise, settings, jacobian, keep)
+    gram = J.T @ J
+    if augmented and SCALAR:  # the new basis, where the record determines k well
+        with np.errstate(all="ignore"):
+            se = math.sqrt(max(rss / t.size * np.linalg.pinv(gram)[0, 0], 0.0))
+        basis = _Basis(float(k), forced, slopes) if se <= NARROW * abs(k) else None
     return _Prediction(
-        rss, t.size, projection.rank, J.T @ J, J.T @ eps, free,
+        rss, t.size, projection.rank, gram, J.T @ eps, free,
         output_rss=float(residuals @ residuals), deviations=float(np.sum((y - y.mean()) ** 2)),
         whiteness=_whiteness(eps), independence=_independence(eps, u), offset=value,
         state=real.V @ z0,
         fitted=fitted if keep else None, residuals=residuals if keep else None,
-    )  # fmt: skip
+    ), basis  # fmt: skip
+
+
+def _updated_slopes(basis: _Basis, k: float, forced: np.ndarray) -> tuple:
+    """(psi, change): the derivative by k (one unknown) of the output from rest at k,
+    `forced`, carried from the basis at a nearby k_b: psi(k) = 2 (y(k) - y(k_b)) / (k - k_b)
+    - psi(k_b) (the mean of psi over the interval is the difference quotient, psi(k_b) and
+    psi(k) its ends: exact to second order in k - k_b), where a full Jacobian runs the
+    augmented system with twice the states. change = psi(k) - psi(k_b), the first-order
+    part: its size, projected, bounds what the update leaves out (about its square)."""
+    change = (2.0 / (k - basis.k)) * (forced - basis.forced)[:, None] - 2.0 * basis.slopes
+    return basis.slopes + change, change
 
 
 def _predictor_stable(real: _Realisation) -> bool:
@@ -4509,6 +4563,8 @@ class Records:
     def __init__(self, records) -> None:
         self.records = list(records)
         self._kept: dict = {}  # the last few answers of `prediction`, by their question
+        self._bases: tuple = (None, [])  # (settings, each record's `_Basis`): the outputs at
+        # the last point whose Jacobian was computed in full, from which nearby ones are carried
 
     def shapes(self) -> list[Shape]:
         return [Shape.of(t, u) for t, u, _ in self.records]
@@ -4535,7 +4591,8 @@ class Records:
         """Each record's exact prediction errors at k with the noise model's filters (ar, ma)
         (`_record_prediction`); keep=True also their signals (dropped by records held
         elsewhere: only sums travel). The last few answers asked for are kept: the fit asks
-        again at its estimate."""
+        again at its estimate. A Jacobian near the last one computed in full is carried from
+        it (`_prediction`), to second order."""
         noise = NoiseModel(*(np.asarray(f, dtype=float) for f in filters))
         key = (_settings_key(k, settings), noise.ar.tobytes(), noise.ma.tobytes(), jacobian, keep)
         if key in self._kept:  # (the least recently asked answer goes first)
@@ -4543,8 +4600,12 @@ class Records:
         else:
             if len(self._kept) >= KEPT_ANSWERS:
                 self._kept.pop(next(iter(self._kept)))
-            self._kept[key] = [_record_prediction(Theta, record, k, noise, settings, jacobian, keep)
-                               for record in self.records]  # fmt: skip
+            same = key[0][1:]  # (a basis serves the same settings only)
+            bases = self._bases[1] if self._bases[0] == same else [None] * len(self.records)
+            answers = [_prediction(Theta, record, k, noise, settings, jacobian, keep, basis)
+                       for record, basis in zip(self.records, bases, strict=True)]  # fmt: skip
+            self._bases = (same, [basis for _, basis in answers])
+            self._kept[key] = [part for part, _ in answers]
         return self._kept[key]
 
     def noise_sums(self, Theta, k, settings, request):

@@ -102,6 +102,37 @@ def test_arguments_that_mean_nothing_here_are_refused(dc_drive):
         dc_drive.fit(t, u, y, noise="pink")
 
 
+def test_a_jacobian_near_the_last_full_one_is_carried_from_it(dc_drive):
+    """One unknown: the Jacobian at a point within 1 % of the last one computed in full is
+    carried from it to second order (the forced response alone, not the augmented system):
+    J^T J and J^T eps as computed in full to 1e-4 of their scale, the basis kept; farther,
+    or where the record determines k poorly, everything in full (a new basis, or none)."""
+    t = 0.02 * np.arange(5001)
+    u = prbs(t, 1.0, 1)
+    clean = held(t, u, 10.0, dc_drive, np.zeros(4)) + 0.2
+    y = clean + 0.1 * np.std(clean) * np.random.default_rng(7).standard_normal(t.size)
+    settings = dict(hold="zoh", offset=True, initial_state=True, known={})
+    Theta, white = dc_drive.theta(), dc_drive.WHITE
+    _, basis = dc_drive._prediction(Theta, (t, u, y), 10.04, white, settings, True)
+    assert basis is not None and basis.k == 10.04
+    full = dc_drive._record_prediction(Theta, (t, u, y), 10.0, white, settings, True)
+    carried, kept = dc_drive._prediction(
+        Theta, (t, u, y), 10.0, white, settings, True, False, basis
+    )
+    assert kept is basis  # carried, not computed in full
+    assert carried.rss == pytest.approx(full.rss, rel=1e-12)
+    np.testing.assert_allclose(carried.gram, full.gram, rtol=1e-4)
+    np.testing.assert_allclose(carried.free, full.free, rtol=1e-4)
+    scale = np.sqrt(full.gram[0, 0] * full.rss)  # the size J^T eps has away from the minimum
+    assert abs(carried.slope[0] - full.slope[0]) < 1e-4 * scale
+    assert (
+        dc_drive._prediction(Theta, (t, u, y), 10.5, white, settings, True, False, basis)[1]
+        is not basis
+    )
+    short = (t[:150], u[:150], y[:150])  # k_se over 1 % of k: no basis, nothing carried
+    assert dc_drive._prediction(Theta, short, 10.0, white, settings, True)[1] is None
+
+
 def test_a_static_model_fits_exactly():
     model = mtt.load(
         "model divider\nparam r1 = 2\nunknown r2 = 3\nSe:v -> 1:loop\n1:loop -> R:r1\n"
