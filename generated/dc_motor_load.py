@@ -3808,6 +3808,7 @@ class _Prediction:
     deviations: float = math.nan  # sum (y - mean y)^2
     whiteness: float = 0.0  # Ljung-Box Q of eps
     independence: float = 0.0  # eps's cross-correlation with the input, as chi-square
+    figures: bool = False  # whether whiteness and independence are computed (`_with_figures`)
     offset: float = 0.0
     state: np.ndarray | None = None  # the initial state, in tf2ss's coordinates
     fitted: np.ndarray | None = None
@@ -3815,6 +3816,14 @@ class _Prediction:
 
     def without_signals(self) -> "_Prediction":
         return replace(self, fitted=None, residuals=None)
+
+    def with_figures(self, u: np.ndarray, noise: "NoiseModel") -> "_Prediction":
+        """With whiteness and independence, from the kept residuals (eps = D/C of them)."""
+        if self.figures or self.residuals is None:
+            return self
+        eps = noise.whiten(self.residuals)
+        return replace(self, whiteness=_whiteness(eps), independence=_independence(eps, u),
+                       figures=True)  # fmt: skip
 
 
 class _Projection:
@@ -3894,7 +3903,9 @@ def _prediction(Theta, record, k, noise: NoiseModel, settings, jacobian: bool, k
     """`_record_prediction`, and the record's basis for later updates: with `jacobian`, the
     Jacobian by k is carried from `basis` (the record's outputs at a point near k) by
     `_updated_slopes` where that is accurate, else computed in full, which gives the new
-    basis (one unknown; otherwise None). The basis is returned as it is when not replaced."""
+    basis (one unknown; otherwise None). The basis is returned as it is when not replaced.
+    With `keep` (the residuals kept) the whiteness and independence figures are left to
+    `_Prediction.with_figures`: a fit needs them at its estimate alone."""
     t, u, y = record
     offset, initial_state, hold = settings["offset"], settings["initial_state"], settings["hold"]
     real = _realise(Theta, k)
@@ -3971,8 +3982,8 @@ def _prediction(Theta, record, k, noise: NoiseModel, settings, jacobian: bool, k
     return _Prediction(
         rss, t.size, projection.rank, gram, J.T @ eps, free,
         output_rss=float(residuals @ residuals), deviations=float(np.sum((y - y.mean()) ** 2)),
-        whiteness=_whiteness(eps), independence=_independence(eps, u), offset=value,
-        state=real.V @ z0,
+        whiteness=0.0 if keep else _whiteness(eps), figures=not keep,
+        independence=0.0 if keep else _independence(eps, u), offset=value, state=real.V @ z0,
         fitted=fitted if keep else None, residuals=residuals if keep else None,
     ), basis  # fmt: skip
 
@@ -4581,10 +4592,12 @@ class Records:
         """The output-error residual sum of squares at k over the records."""
         return sum(_residual_sum(Theta, record, k, settings) for record in self.records)
 
-    def prediction(self, Theta, k, filters, settings, jacobian: bool, keep: bool = False) -> list:
+    def prediction(self, Theta, k, filters, settings, jacobian: bool, keep: bool = False,
+                   figures: bool = False) -> list:  # fmt: skip
         """Each record's exact prediction errors at k with the noise model's filters (ar, ma)
         (`_record_prediction`); keep=True also their signals (dropped by records held
-        elsewhere: only sums travel). The last few answers asked for are kept: the fit asks
+        elsewhere: only sums travel); figures=True with their whiteness and independence
+        (always without keep). The last few answers asked for are kept: the fit asks
         again at its estimate. A Jacobian near the last one computed in full is carried from
         it (`_prediction`), to second order."""
         noise = NoiseModel(*(np.asarray(f, dtype=float) for f in filters))
@@ -4600,6 +4613,9 @@ class Records:
                        for record, basis in zip(self.records, bases, strict=True)]  # fmt: skip
             self._bases = (same, [basis for _, basis in answers])
             self._kept[key] = [part for part, _ in answers]
+        if figures:
+            self._kept[key] = [part.with_figures(record[1], noise)
+                               for part, record in zip(self._kept[key], self.records, strict=True)]  # fmt: skip
         return self._kept[key]
 
     def noise_sums(self, Theta, k, settings, request):
@@ -5476,7 +5492,7 @@ def _exact_fit(Theta, records, shapes, k_ls, coefficients, total, found, *, c, k
     if not uncertainty:
         return _finish(Theta, records, shapes, k, coefficients, method="pem",
                        iterations=iterations, notes=notes, noise=chosen, **common)  # fmt: skip
-    parts = records.prediction(Theta, k, chosen.filters, settings, True, keep)
+    parts = records.prediction(Theta, k, chosen.filters, settings, True, keep, True)
     summary = _exact_summary(parts, chosen, count)
     return _finish(Theta, records, shapes, k, coefficients, method="pem", iterations=iterations,
                    notes=notes, summary=summary, **common)  # fmt: skip
