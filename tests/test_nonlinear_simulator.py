@@ -242,6 +242,30 @@ def test_many_sets_cross_the_overflow_each_at_its_own_time(tanks):
     assert len({int(np.argmax(row)) for row in over}) > 4  # at times of its own
 
 
+def test_pendulum_sets_started_in_step_stop_together_and_as_if_alone(arm, monkeypatch):
+    """After each switch of the voltage every arm stops and turns, each at its own time,
+    where tanh(50 w) turns within a millisecond; the batch starts the sets' shares of the
+    run so that those moments fall on one sample (a pilot finds them): every set as if
+    simulated alone, and the sets were started apart."""
+    t = np.linspace(0.0, 20.0, 2001)
+    u = 3.0 * np.where((np.arange(t.size) // 250) % 2, -1.0, 1.0)
+    k = np.column_stack((np.linspace(0.04, 0.06, 8), np.linspace(0.12, 0.08, 8)))
+    shifted = []
+    pilot = arm._shifts
+
+    def watched(*arguments):
+        shifts, reach = pilot(*arguments)
+        shifted.append(0 if shifts is None else int(shifts.max()))
+        return shifts, reach
+
+    monkeypatch.setattr(arm, "_shifts", watched)
+    together = arm.simulate(t, u, k, hold="zoh", rtol=1e-9, atol=1e-11)
+    assert max(shifted, default=0) >= 2  # the sets' stops were samples apart, and brought in step
+    for row in range(8):
+        alone = arm.simulate(t, u, k[row], hold="zoh", rtol=1e-11, atol=1e-13)
+        np.testing.assert_allclose(together[row], alone, rtol=0, atol=1e-8 * np.abs(alone).max())
+
+
 def test_kernels_equal_sympys_evaluation_of_the_equations(tanks, arm):
     rng = np.random.default_rng(1)
     for module, system, k in ((tanks, two_tanks(), TWO_TANKS_K), (arm, pendulum(), PENDULUM_K)):
