@@ -201,10 +201,13 @@ def test_stiction_is_reported_not_smoothed():
         module.simulate(t, 0.05 * np.ones(t.size), x0=[0.0, 0.0, 0.0])
 
 
-def test_a_tank_run_dry_is_a_simulation_error(tanks):
+def test_a_tank_run_dry_is_held_empty(tanks):
+    """(It was a SimulationError; it empties at 2 sqrt(0.5)/c1 = 2.828 and stays empty:
+    tests/test_nonlinear_edges.py.)"""
     t = np.linspace(0.0, 100.0, 101)
-    with pytest.raises(tanks.SimulationError, match=r"at t = 2\.828|between t = \d"):
-        tanks.simulate(t, np.zeros(t.size), x0=[0.5, 0.5])
+    run = tanks.sensitivities(t, np.zeros(t.size), x0=[0.5, 0.5])
+    assert np.all(run.x[t > 2.83, 0] == 0.0) and np.all(run.x[t < 2.82, 0] > 0.0)
+    assert run.events[0][:2] == (pytest.approx(2 * math.sqrt(0.5) / 0.5, abs=1e-6), 0)
 
 
 @pytest.mark.parametrize("signal", [_record, _multisine])

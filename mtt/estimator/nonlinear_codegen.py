@@ -20,7 +20,16 @@ import sympy
 
 from mtt.derivation.nonlinear import kept as kept_symbols
 from mtt.estimator.codegen import environment, load_source, module_path, shadows
-from mtt.estimator.kernels import SIDE, TIE, Frozen, KernelError, field_kernel, freeze, kernel
+from mtt.estimator.kernels import (
+    SIDE,
+    TIE,
+    Frozen,
+    KernelError,
+    field_kernel,
+    freeze,
+    kernel,
+    shielded,
+)
 from mtt.estimator.literals import finite_float, is_name
 from mtt.estimator.rosenbrock import sensitivity_kernel, step_kernel
 from mtt.language.diagnostics import ModelError, Source, error
@@ -64,11 +73,38 @@ def _check(system: NonlinearStateSpace, kept: list[sympy.Symbol]) -> None:
         raise ValueError(f"f must be {n} x 1 and g 1 x 1, not {system.f.shape}, {system.g.shape}")
 
 
-def _kernels(system: NonlinearStateSpace, kept: list[sympy.Symbol]) -> tuple[Frozen, list]:
+def _edges(f: list, states: list[sympy.Symbol], unknowns: list, kept: list) -> list:
+    """The domain edges the simulator can hold a state on: (state index, edge value, slope)
+    for each power of f with a positive exponent that is not an integer (sqrt: a level under
+    an orifice) whose base is a linear function alpha x_i + beta of one state and the
+    parameters alone. f is finite on such an edge and its Jacobian is not (its column i
+    is infinite there): a state that reaches it while the field points out of the domain
+    (a tank run dry with no inflow) stays on it. Logarithms, negative exponents and bases
+    of several states or of the input have no such edge: leaving their domain is an error."""
+    constants = {*unknowns, *kept}
+    found: dict[tuple[int, sympy.Expr], sympy.Expr] = {}
+    for entry in f:
+        for power in sympy.sympify(entry).atoms(sympy.Pow):
+            base, exponent = power.args
+            if not (exponent.is_number and exponent.is_positive and not exponent.is_integer):
+                continue
+            inside = base.free_symbols & set(states)
+            if len(inside) != 1 or not base.free_symbols - inside <= constants:
+                continue  # (a kink's guarded branch reads its selectors: never outside)
+            (x,) = inside
+            slope = sympy.simplify(base.diff(x))
+            if slope.free_symbols - constants or slope == 0:
+                continue
+            edge = sympy.simplify(-base.subs(x, 0) / slope)
+            found.setdefault((states.index(x), edge), slope)
+    return [(i, edge, slope) for (i, edge), slope in sorted(found.items(), key=str)]
+
+
+def _kernels(system: NonlinearStateSpace, kept: list[sympy.Symbol]) -> tuple[Frozen, list, list]:
     """The module's kernels. A kink (abs, min, max: f stays continuous) takes the branch
     the state is on, computed inside each kernel (its mode is side(s) there); a jump
     (sign) keeps the branch its mode argument says, frozen by the integrators between
-    the events they locate."""
+    the events they locate. Also the domain edges (`_edges`)."""
     n = len(system.states)
     frozen = freeze([*system.f, system.g[0]])
     f = sympy.Matrix(frozen.expressions[:n])
@@ -82,6 +118,8 @@ def _kernels(system: NonlinearStateSpace, kept: list[sympy.Symbol]) -> tuple[Fro
     base = [*x, u, *k, *kept]
     arguments = base + held
     f_x, f_k = f.jacobian(x), f.jacobian(k)
+    # (a branch switched off by a selector is kept inside its domain: no edge of the state's)
+    edges = _edges([shielded(e, frozen.selectors) for e in f], x, k, kept)
     gm = sympy.Matrix([g])
     jumps = [switch.function for switch in frozen.switches if not switch.continuous]
     sm = sympy.Matrix(jumps) if jumps else sympy.zeros(0, 1)
@@ -147,8 +185,9 @@ def _kernels(system: NonlinearStateSpace, kept: list[sympy.Symbol]) -> tuple[Fro
         ),
         step_kernel(n, zeros, rest),
         sensitivity_kernel(n, len(k), zeros, rest),
+        kernel("edges", [*k, *kept], [e for _, *pair in edges for e in pair], names),
     ]
-    return frozen, kernels
+    return frozen, kernels, edges
 
 
 def _context(
@@ -157,7 +196,7 @@ def _context(
     kept = list(kept_symbols(system))
     _check(system, kept)
     try:
-        frozen, kernels = _kernels(system, kept)
+        frozen, kernels, edges = _kernels(system, kept)
     except KernelError as exc:
         raise _fail(system, "unsupported_relation", str(exc)) from None
     jumps = [switch for switch in frozen.switches if not switch.continuous]
@@ -211,6 +250,7 @@ def _context(
         "p": p,
         "r": len(jumps),
         "kinks": len(frozen.switches) - len(jumps),
+        "edge_states": tuple(i for i, _, _ in edges),
     }
 
 
