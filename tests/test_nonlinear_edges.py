@@ -256,3 +256,15 @@ def test_a_record_in_which_the_tanks_run_dry_is_fitted_exactly(tanks):
     assert found.ok, found.message
     np.testing.assert_allclose(found.k, TWO_TANKS_K, rtol=1e-6)
     np.testing.assert_allclose(found.states[0], states[0], rtol=1e-5)
+
+
+def test_a_record_starting_with_an_empty_tank_and_the_pump_off_is_fitted(tanks):
+    """The guessed initial state (the steady state at the first input: both tanks empty)
+    is on the edges, where dy/dx0 is one-sided: the fit starts just inside them."""
+    t = np.arange(241) * 0.5
+    u = np.where(t < 10, 0.0, pump(t, 0.3, 0.8, 20, 1))
+    states = held(tanks_rhs(TWO_TANKS_K), t, u, (0.0, 1.0))
+    found = tanks.fit(t, u, tanks_output(states), k0=[0.6, 0.33, 1.2], hold="zoh", multistart=0)
+    assert found.ok, found.message
+    np.testing.assert_allclose(found.k, TWO_TANKS_K, rtol=1e-6)
+    np.testing.assert_allclose(found.states[0], [0.0, 1.0], atol=1e-6)
