@@ -100,3 +100,37 @@ def test_fine_sampling_keeps_its_digits(dc_drive):
     last = np.exp(-s) * (s - 3 * s**2 / 2 + s**3 / 2 - s**4 / 24)
     assert np.max(np.abs(states[:, 0] - first)) < 1e-11
     assert np.max(np.abs(states[:, 4] - last)) < 1e-11
+
+
+def _companion(poles) -> np.ndarray:
+    A = np.eye(3, k=1)
+    A[-1] = -np.real(np.poly(poles))[:0:-1]
+    return A
+
+
+@pytest.mark.parametrize(
+    "A",
+    [_companion((-1.0, -2.0, -3.0)), _companion((-0.5 + 2j, -0.5 - 2j, -4)),
+     np.array([[0.0, 1.0, 0.5], [0.0, -1.0, 1.0], [0.0, 0.0, -2.0]])],  # an integrator
+)  # fmt: skip
+def test_schur_rows_follow_the_step_by_step_propagation(dc_drive, A):
+    """`_schur_rows` (real poles, a complex pair, an integrator kept in its own triangular
+    form), several signals from a non-zero state, two of them constant: against a
+    step-by-step propagation by scipy's expm."""
+    from scipy import linalg
+
+    B = np.array([0.0, 0.0, 1.0])
+    h, size = 0.05, 400
+    t = h * np.arange(size)
+    W = np.array([np.sin(t), np.full(size, 2.5), np.full(size, -1.0)])
+    start = np.array([0.3, -0.2, 0.1])
+    V, _, rows = dc_drive._schur_rows(A, B, t, W, ("zoh",) * 3, start)
+    states = rows if V is None else V @ rows
+    E = linalg.expm(np.block([[A, B[:, None]], [np.zeros((1, 4))]]) * h)
+    for j in range(3):
+        x, expected = start.copy(), [start]
+        for i in range(size - 1):
+            x = E[:3, :3] @ x + E[:3, 3] * W[j, i]
+            expected.append(x)
+        scale = max(1.0, np.abs(states[j]).max())
+        assert np.max(np.abs(states[j] - np.array(expected).T)) < 1e-12 * scale
