@@ -268,3 +268,12 @@ def test_a_record_starting_with_an_empty_tank_and_the_pump_off_is_fitted(tanks):
     assert found.ok, found.message
     np.testing.assert_allclose(found.k, TWO_TANKS_K, rtol=1e-6)
     np.testing.assert_allclose(found.states[0], [0.0, 1.0], atol=1e-6)
+
+
+def test_an_initial_state_past_an_edge_is_an_error(tanks):
+    t = np.linspace(0.0, 5.0, 51)
+    for k in (None, [TWO_TANKS_K, TWO_TANKS_K]):
+        with pytest.raises(tanks.SimulationError, match=r"x0 puts q1 at -0\.1, past the edge"):
+            tanks.simulate(t, np.ones(t.size), k, x0=[-0.1, 1.0], hold="zoh")
+    with pytest.raises(tanks.SimulationError, match=r"x0 puts q2 at -1e-09"):
+        tanks.sensitivities(t, np.ones(t.size), x0=[0.5, -1e-9], hold="linear")
