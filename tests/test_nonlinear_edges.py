@@ -16,7 +16,7 @@ import numpy as np
 import pytest
 import sympy
 from nonlinear_models import TWO_TANKS_K, pendulum, two_tanks, weir_tanks
-from nonlinear_records import held, pump, tanks_output, tanks_rhs
+from nonlinear_records import held, pump, tanks_output, tanks_rhs, weir_rhs
 
 import mtt
 from mtt.cli.main import main
@@ -277,3 +277,24 @@ def test_an_initial_state_past_an_edge_is_an_error(tanks):
             tanks.simulate(t, np.ones(t.size), k, x0=[-0.1, 1.0], hold="zoh")
     with pytest.raises(tanks.SimulationError, match=r"x0 puts q2 at -1e-09"):
         tanks.sensitivities(t, np.ones(t.size), x0=[0.5, -1e-9], hold="linear")
+
+
+def test_the_model_files_tanks_overflow_run_dry_and_fill_on_a_ramp():
+    """models/two_tanks.bg (its weir above the rim): the pump at 40 overflows the upper tank,
+    off it runs both dry, then on again along a ramp (hold="linear": the field points back
+    in slowly); the sensitivities under their own looser tolerance too."""
+    tanks = mtt.load(TANKS).simulator()
+    t = np.arange(0.0, 2001.0, 2.0)
+    u = np.where(t < 400, 40.0, np.where(t < 1200, 0.0, 10.0))
+    reference = held(weir_rhs((2.0, 2.5)), t, u, [500.0, 200.0])[:, 1] / 40
+    np.testing.assert_allclose(tanks.simulate(t, u, x0=[500, 200], hold="zoh"), reference,
+                               atol=1e-5)  # fmt: skip
+    run = tanks.sensitivities(t, u, x0=[500, 200], hold="linear", sensitivity_rtol=1e-6)
+    assert run.y.max() > 150 and np.count_nonzero(run.y == 0.0) > 150
+    assert [(index, mode) for _, index, mode in run.events] == [
+        (0, 0.0),
+        (1, 0.0),
+        (0, 1.0),
+        (1, 1.0),
+    ]
+    assert run.events[2][0] == pytest.approx(1198.0) and np.isfinite(run.dy_dk).all()
