@@ -244,16 +244,19 @@ def test_leaving_a_domain_with_no_edge_to_hold_on_is_a_located_error():
         module.simulate(t, np.zeros(t.size), x0=[1.0, 0.0])
 
 
-def test_a_record_in_which_the_tanks_run_dry_is_fitted_exactly(tanks):
+@pytest.mark.parametrize("shooting", ["auto", "multiple"])
+def test_a_record_in_which_the_tanks_run_dry_is_fitted_exactly(tanks, shooting):
     """The pump off from 20 s to 60 s: both tanks run dry (the output is 0 for some 20 s),
-    then a random pump signal; the record by solve_ivp, noise-free."""
+    then a random pump signal; the record by solve_ivp, noise-free. Multiple shooting's
+    segments that start in the dry spell start just inside the edges, bounded there."""
     t = np.arange(241) * 0.5
     u = np.where(t < 20, 0.8, np.where(t < 60, 0.0, pump(t, 0.3, 0.8, 20, 1)))
     states = held(tanks_rhs(TWO_TANKS_K), t, u, (1.0, 2.0))
     y = tanks_output(states)
     assert np.count_nonzero(np.abs(y) < 1e-9) > 30
-    found = tanks.fit(t, u, y, k0=[0.6, 0.33, 1.2], hold="zoh", multistart=0)
+    found = tanks.fit(t, u, y, k0=[0.6, 0.33, 1.2], hold="zoh", multistart=0, shooting=shooting)
     assert found.ok, found.message
+    assert found.shooting == ("single" if shooting == "auto" else "multiple")
     np.testing.assert_allclose(found.k, TWO_TANKS_K, rtol=1e-6)
     np.testing.assert_allclose(found.states[0], states[0], rtol=1e-5)
 
