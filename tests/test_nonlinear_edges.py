@@ -301,3 +301,29 @@ def test_the_model_files_tanks_overflow_run_dry_and_fill_on_a_ramp():
         (1, 1.0),
     ]
     assert run.events[2][0] == pytest.approx(1198.0) and np.isfinite(run.dy_dk).all()
+
+
+def test_a_state_is_held_below_an_edge_above_zero():
+    """q' = u - a sqrt(4 - 2q): the domain is q <= 2; the input 3 drives q to 2, where it
+    is held (the field points out) until the input turns to -1 (it points back in)."""
+    q, u, y, a = sympy.symbols("q u y a")
+    f = sympy.Matrix([u - a * sympy.sqrt(4 - 2 * q)])
+    lid = nonlinear_codegen.load(
+        NonlinearStateSpace("lid", (q,), u, y, (a,), {}, f, sympy.Matrix([q])), values={"a": 1.0}
+    )
+    t = np.linspace(0.0, 10.0, 101)
+    signal = np.where(t < 5.0, 3.0, -1.0)
+    run = lid.sensitivities(t, signal, x0=[0.0], hold="zoh")
+    assert [(index, mode) for _, index, mode in run.events] == [(0, 0.0), (0, 1.0)]
+    assert run.events[1][0] == 5.0 and np.all(run.x[(t > 1.3) & (t <= 5.0), 0] == 2.0)
+
+    def states(k):
+        def rhs(x, v):
+            rate = v - k * math.sqrt(max(4 - 2 * x[0], 0.0))
+            return [0.0 if x[0] >= 2.0 and rate > 0 else rate]
+
+        return held(rhs, t, signal, [0.0])
+
+    np.testing.assert_allclose(run.x, states(1.0), atol=1e-8)
+    difference = (states(1.0 + 1e-4) - states(1.0 - 1e-4)) / 2e-4
+    np.testing.assert_allclose(run.dx_dk[:, :, 0], difference, atol=1e-6)
