@@ -4765,13 +4765,6 @@ def _input_warnings(shapes, hold: str, nuisances: bool) -> tuple[list[str], bool
     return warnings_, idle
 
 
-def _named_point(k) -> str:
-    """k as a warning names it: `name = value` for each unknown."""
-    if SCALAR:
-        return f"{UNKNOWN} = {k:.6g}"
-    return ", ".join(f"{name} = {value:.6g}" for name, value in zip(UNKNOWNS, k, strict=True))
-
-
 def _fit_minima(coefficients, bounds, found) -> np.ndarray:
     """The criterion's local minima within the bounds: ascending (one unknown), or the
     global search's, lowest first (several)."""
@@ -5068,17 +5061,8 @@ class _Walk:
             return centre + sign * hi
 
 
-# The verdict: one fit's figures, the warnings a user can act on, and whether it is ok ------------
-#
-# Every method ends here with a _Summary of the records at its estimate. ok is False, with
-# the reason among the warnings, whenever a diagnostic contradicts the answer: the unknowns
-# not identifiable, a constant output, a fit worse than the output's mean (fit % below 0), a
-# point of lower exact cost (the prediction error or, for "iv" and "ls", the output error
-# with the nuisances refitted) by more than MARGIN noise variances, a standard error larger
-# than the estimate, an unknown at its bound, a record whose offset and initial state
-# absorb more than UNDETERMINED of the information about k, and (method "pem") a profile
-# likelihood that contradicts k +- 1.96 k_se (`_profile`: a better point, an interval the
-# record does not bound, or one far from the quadratic one).
+# The verdict's rules that every fit shares (the linear fit's verdict.py, the nonlinear fit's
+# nonlinear/verdict.py): the same thresholds and the same words for the same contradiction.
 
 ABSORBED = 0.99  # the nuisances' share of the information about k beyond which it is named
 # and the profile likelihood judges the interval, quadratic or not
@@ -5089,6 +5073,76 @@ UNDETERMINED = 0.999  # beyond this share ok is False whatever the rest says. Me
 # small k_se; on 10-s records at 20 dB (right answers) the share reached 95.6 % (60 seeds) and
 # 99.5 % (20 seeds of another PRBS), and under 50 % on the long coloured-noise and dc_motor rows
 RESOLVED = 1e-10  # what they leave of it below this share is rounding: k and k_se mean nothing
+
+
+def _absorbed_warning(share: float, name: str, nuisances: str, *, poor: bool,
+                      clean: bool) -> tuple[str, bool]:  # fmt: skip
+    """The warning where the nuisances (`nuisances`: "the offset and initial state") take
+    more than ABSORBED of the information about unknown `name` (`share`: what they leave
+    of it), and whether it contradicts the estimate: what is left is rounding (RESOLVED),
+    determines it poorly (`poor`: its standard error over POORLY_DETERMINED of it), or is
+    under 1 - UNDETERMINED of it on noisy data (not `clean`)."""
+    rounding = share < RESOLVED
+    poor = rounding or poor
+    undetermined = not clean and share < 1 - UNDETERMINED
+    text = (
+        f"{nuisances} take {_share_text(1 - share)} of the information about {name} (the "
+        "input's response looks like theirs, as a step at the first sample does)"
+        + ("; what is left is at the level of rounding: neither the estimate nor its standard "
+           "error means anything" if rounding else "; what is left determines it poorly" if poor
+           else f"; what is left, under {100 * (1 - UNDETERMINED):g} %, does not determine "
+           "it: on such records the exact cost has minima far from the truth with a small "
+           "k_se" if undetermined else "")
+        + "; a longer record, or, if the record starts at rest and without offset, a fit "
+        "with offset=False, initial_state=False, would determine it"
+    )  # fmt: skip
+    return text, poor or undetermined
+
+
+def _below_mean(fit_percent: float) -> str:
+    """The contradiction of a fit below 0 %."""
+    return (
+        f"the fit is {fit_percent:.4g} %: the model's output is further from the data than "
+        "their mean; the model, the hold, the records or the settings are not as assumed"
+    )
+
+
+def _lower_point(k, lower: float) -> str:
+    """The contradiction of a point k met on the way (a profile's refit) whose prediction
+    error is `lower` noise variances below the estimate's."""
+    return (
+        f"{_named_point(k)} fits the data better than the estimate (its exact prediction "
+        f"error is lower by {lower:.3g} noise variances): the estimate is a local minimum of "
+        "the exact cost, not its minimum; fit again within bounds around the better point, or "
+        "with a longer or richer record"
+    )
+
+
+def _named_point(k) -> str:
+    """k as a warning names it: `name = value` for each unknown."""
+    if SCALAR:
+        return f"{UNKNOWN} = {float(k):.6g}"
+    return ", ".join(f"{name} = {value:.6g}" for name, value in zip(UNKNOWNS, k, strict=True))
+
+
+def _share_text(fraction: float) -> str:
+    """A share close to 1 with the digits that tell it from 1 (99.998 %, not 100 %)."""
+    digits = max(4, 2 - math.floor(math.log10(max(1 - fraction, 1e-12))))
+    return f"{100 * fraction:.{min(digits, 12)}g} %"
+
+
+# The verdict: one fit's figures, the warnings a user can act on, and whether it is ok ------------
+#
+# Every method ends here with a _Summary of the records at its estimate. ok is False, with
+# the reason among the warnings, whenever a diagnostic contradicts the answer: the unknowns
+# not identifiable, a constant output, a fit worse than the output's mean (fit % below 0), a
+# point of lower exact cost (the prediction error or, for "iv" and "ls", the output error
+# with the nuisances refitted) by more than MARGIN noise variances, a standard error larger
+# than the estimate, an unknown at its bound, a record whose offset and initial state
+# absorb more than UNDETERMINED of the information about k, and (method "pem") a profile
+# likelihood that contradicts k +- 1.96 k_se (`_profile`: a better point, an interval the
+# record does not bound, or one far from the quadratic one). The thresholds and words it
+# shares with the nonlinear fit's verdict are in honesty.py.
 
 
 @dataclass(frozen=True)
@@ -5247,21 +5301,10 @@ def _verdict(Theta, records, shapes, k, summary: _Summary, *, found_, idle, nuis
     clean = not math.sqrt(rss / summary.count) > CLEAN * spread  # noise-free data (to rounding)
     absorbed = nuisances and not idle and 0 <= share < 1 - ABSORBED
     if absorbed:  # (noise-free data: what is left determines k to rounding)
-        rounding = share < RESOLVED
-        poor = rounding or not se_which <= POORLY_DETERMINED * abs(value_which)
-        undetermined = not clean and share < 1 - UNDETERMINED
-        (contradictions if poor or undetermined else found_).append(
-            f"the offset and initial state take {_share_text(1 - share)} of the information "
-            f"about {UNKNOWNS[which]} (the input's response looks like theirs, as a step at the "
-            "first sample does)"
-            + ("; what is left is at the level of rounding: neither the estimate nor its standard "
-               "error means anything" if rounding else "; what is left determines it poorly" if poor
-               else f"; what is left, under {100 * (1 - UNDETERMINED):g} %, does not determine "
-               "it: on such records the exact cost has minima far from the truth with a small "
-               "k_se" if undetermined else "")
-            + "; a longer record, or, if the record starts at rest and without offset, a fit "
-            "with offset=False, initial_state=False, would determine it"
-        )
+        text, contradicts = _absorbed_warning(
+            share, UNKNOWNS[which], "the offset and initial state", clean=clean,
+            poor=not se_which <= POORLY_DETERMINED * abs(value_which))  # fmt: skip
+        (contradictions if contradicts else found_).append(text)
     if ok and not idle and _excitation(last_moments, Theta, k, clean) < EXCITATION:
         found_.append(
             "the input does not excite the system enough for this model: the moments of the "
@@ -5285,10 +5328,7 @@ def _verdict(Theta, records, shapes, k, summary: _Summary, *, found_, idle, nuis
             "(NaN); check the output's column and the experiment"
         )
     elif fit_percent < 0:
-        contradictions.append(
-            f"the fit is {fit_percent:.4g} %: the model's output is further from the data than "
-            "their mean; the model, the hold, the records or the settings are not as assumed"
-        )
+        contradictions.append(_below_mean(fit_percent))
     if dof < 10:
         found_.append(
             f"only {summary.count} samples for k and {summary.count - dof - count_} other "
@@ -5368,12 +5408,7 @@ def _profile_warnings(k, profile: _Profile, bounds) -> list[str]:
             )
     rise, point = profile.lowest
     if rise < -MARGIN:
-        said.append(
-            f"{_named_point(point)} fits the data better than the estimate (its exact prediction "
-            f"error is lower by {-rise:.3g} noise variances): the "
-            "estimate is a local minimum of the exact cost, not its minimum; fit again within "
-            "bounds around the better point, or with a longer or richer record"
-        )
+        said.append(_lower_point(point, -rise))
     return said
 
 
@@ -5407,11 +5442,6 @@ def _short_record(Theta, k, shapes) -> list[str]:
         ]
     return []
 
-
-def _share_text(fraction: float) -> str:
-    """A share close to 1 with the digits that tell it from 1 (99.998 %, not 100 %)."""
-    digits = max(4, 2 - math.floor(math.log10(max(1 - fraction, 1e-12))))
-    return f"{100 * fraction:.{min(digits, 12)}g} %"
 
 
 # The exact fit's driver: its starts, its noise model and its summary ----------------------------

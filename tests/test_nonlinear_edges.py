@@ -311,6 +311,43 @@ def test_a_state_at_its_edge_is_held_while_the_rest_descend(tanks):
     np.testing.assert_allclose(found.states[0], [1.0, 0.0], atol=1e-5)
 
 
+def test_the_verdict_refuses_a_state_at_its_edge_that_the_record_says_is_inside(tanks):
+    """The honesty rule (issue 18) on an initial state: the lower tank's put on its edge
+    (empty) at the truth of everything else, on a record that started with it at 0.5: the
+    records say it belongs inside (moving it alone gains thousands of noise variances), so
+    the verdict names it as a contradiction; at the right state it says nothing."""
+    t = np.arange(241) * 0.5
+    u = pump(t, 0.3, 0.8, 20, 1)
+    y = noisy(tanks_output(held(tanks_rhs(TWO_TANKS_K), t, u, (1.0, 0.5))), 20.0, 1)
+    problem = tanks._Problem([(t, u, y)], "zoh", {}, (1e-9, 1e-12), True, True, np.zeros((1, 2)))
+    said = {}
+    for lower in (1e-6, 0.5):
+        theta = problem.pack(np.array(TWO_TANKS_K), [[1.0, lower]], [0.0])
+        errors, J, _ = problem.residuals(theta)
+        variance = float(errors @ errors) / (errors.size - problem.size)
+        local = tanks._Local(theta, 0.5 * float(errors @ errors), 0, "", theta[:3])
+        said[lower] = tanks._against_the_records(problem, local, errors, J, variance)
+    assert said[0.5] == []
+    assert len(said[1e-6]) == 1 and said[1e-6][0].startswith(
+        "the initial state q2 of record 1 is at its domain's edge (0) where the records say "
+        "otherwise: moving it inside would lower the sum of squares by"
+    )
+
+
+@pytest.mark.parametrize(
+    ("left", "clean", "contradicts"),
+    [(5e-4, False, True), (5e-3, False, False), (5e-4, True, False), (1e-11, True, True)],
+)
+def test_the_nuisances_information_rule_is_the_linear_fits(tanks, left, clean, contradicts):
+    """Too little information left about an unknown once the initial states and offsets
+    are fitted: the linear fit's rule and words (templates/algorithm/honesty.py.j2),
+    contradicting under 0.1 % left on noisy data, or at rounding."""
+    text, refused = tanks._absorbed_warning(left, "c1", "the initial states and offsets",
+                                            poor=False, clean=clean)  # fmt: skip
+    assert refused is contradicts
+    assert text.startswith("the initial states and offsets take 99.") and " % of the" in text
+
+
 def test_an_initial_state_past_an_edge_is_an_error(tanks):
     t = np.linspace(0.0, 5.0, 51)
     for k in (None, [TWO_TANKS_K, TWO_TANKS_K]):
