@@ -10,9 +10,12 @@ import warnings
 
 import numpy as np
 import pytest
+import sympy
 from nonlinear_records import held, noisy, pump, weir_rhs
 
 import mtt
+from mtt.derivation.nonlinear import NonlinearStateSpace
+from mtt.estimator import nonlinear_codegen
 
 TRUE = (2.0, 2.5)
 
@@ -75,3 +78,24 @@ def test_a_step_out_of_the_domain_is_pulled_back_part_of_the_way(tanks):
     expected = theta + tanks.DOMAIN_SHARE * edge * (outside - theta)
     np.testing.assert_allclose(moved, expected, atol=2**-tanks.DOMAIN_BISECTIONS * 200)
     assert problem.evaluable(moved) and not problem.evaluable(outside)
+
+
+def test_an_unknown_bounded_on_one_side_moves_toward_its_bound():
+    """bounds=(0, inf): the descent held an unknown bounded on one side whenever its steps
+    pointed toward the bound (an infinite box width made every point count as at the
+    bound), so a start at 3 for the truth 1 stayed at 3 and the model file's start stopped
+    14 standard errors short, both reported as minima."""
+    q, u, y, a = sympy.symbols("q u y a")
+    f = sympy.Matrix([u - a * sympy.sqrt(q)])
+    system = NonlinearStateSpace("tank", (q,), u, y, (a,), {}, f, sympy.Matrix([q]))
+    tank = nonlinear_codegen.load(system, values={"a": 1.0})
+    t = np.linspace(0.0, 50.0, 201)
+    pumped = np.where((t // 5) % 2 == 0, 1.0, 2.0)
+    level = tank.simulate(t, pumped, 1.0, x0=[1.0], hold="zoh")
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        found = tank.fit(t, pumped, level, k0=3.0, bounds=(0.0, np.inf), hold="zoh",
+                         multistart=0, profile=None)  # fmt: skip
+    assert found.ok, found.message
+    for _, _, reached in found.starts:
+        assert reached[0] == pytest.approx(1.0, rel=1e-9)
