@@ -228,3 +228,16 @@ def test_coloured_noise_intervals_take_students_t_for_the_noise_models_uncertain
     assert np.allclose((found.ci[:, 1] + found.ci[:, 0]) / 2, found.k)
     assert np.all(quantile > 2.0) and np.all(quantile < 2.15)  # 2.03 to 2.08: nu 15 to 25
     assert (white.ci[:, 1] - white.ci[:, 0]) / (2 * white.k_se) == pytest.approx(1.959963984540054)
+
+
+def test_a_fit_that_reaches_no_minimum_says_so_not_that_the_model_cannot_be_simulated(tanks):
+    """5 s of a step (the unknowns and the initial state hardly separated): the descent
+    still creeps along the valley after its 100 simulations. No estimate, ok False, and
+    the message says so (it said the model could not be simulated)."""
+    t = np.arange(21) * 0.25
+    u = np.where(t < 2.5, 0.5, 0.7)
+    y = tanks_output(held(tanks_rhs(TRUE), t, u, (1.0, 2.0)))
+    found = _quiet(tanks.fit, t, u, y, hold="zoh", multistart=0, profile=None, shooting="single")
+    assert not found.ok and np.isnan(found.k).all()
+    assert found.message.startswith("no start reached a minimum of the criterion")
+    assert "reaches no minimum within 100 simulations" in found.message
