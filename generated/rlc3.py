@@ -3333,18 +3333,25 @@ def _with_nuisances(t, u, y, k, *, hold: str, offset: bool, initial_state: bool,
     return forced + Xi @ nu, value, real.V @ z0
 
 
-# Regular sampling of a quasi-triangular system: the recursion as scalar recursions -------------
+# Regular sampling of a quasi-triangular system: the recursion in blocks of samples -------------
 #
 # With one sampling interval and A upper quasi-triangular (a real Schur form: 1 x 1 blocks and
-# 2 x 2 blocks of complex pairs), Phi = e^(A h) has the same blocks, and the recursion
-# z_(i+1) = Phi z_i + drive_i is solved from the last block up: each block's states follow a
-# scalar recursion (a complex one for a pair, in its eigenvector's coordinates) driven by
-# drive and the states below it, which scipy's lfilter runs. The arithmetic is the recursion's
-# own, with each pole on the diagonal (no polynomial in z, whose coefficients would lose the
-# poles crowding near z = 1 at fine sampling).
+# 2 x 2 blocks of complex pairs), Phi = e^(A h) has the same blocks, and so has Phi^m. The
+# recursion z_(i+1) = Phi z_i + Gamma^T [w_i, w_(i+1)] is run m samples at a time: from a
+# block's first state x_b = z_(bm) and its m + 1 samples W_b, every state of the block is
+#     z_(bm + l) = Phi^l x_b + W_b K_l            (l = 0..m, K_l the input's l-step map)
+# and x_(b+1) = Phi^m x_b + W_b K_m. That block recursion is solved from the last diagonal
+# block up: each block's states follow a scalar recursion (a complex one for a pair, in its
+# eigenvector's coordinates) driven by W_b K_m and the states below it, which scipy's lfilter
+# runs over the N/m blocks; the states within the blocks are then two matrix products for
+# all of them at once. The arithmetic is the recursion's own (products of Phi, each pole on
+# the diagonal): no polynomial in z, whose coefficients would lose the poles crowding near
+# z = 1 at fine sampling.
 
 PAIR_CONDITION = 100.0  # a complex pair's eigenvectors worse conditioned: the general recursion
-TRIANGULAR_CHUNK = 1 << 15  # samples per chunk of `_triangular`
+TRIANGULAR_BLOCK = 16  # samples per block of `_triangular` (measured: 8 to 32 within 20 %)
+BLOCKED_FROM = 32  # blocks a record needs for them (on fewer, the maps cost what blocks save)
+TRIANGULAR_CHUNK = 1 << 15  # samples per chunk of `_triangular`'s block recursion
 TINY = 1e-280  # a state below it is 0 between chunks (inputs and outputs are above 1e-100)
 
 
@@ -3371,80 +3378,113 @@ def _pair_mode(P: np.ndarray):
     """(lambda, v (2, 1), w) of a real 2 x 2 block P with complex eigenvalues: lambda the one
     of positive imaginary part, v its unit eigenvector, w the first row of [v, conj v]^-1
     (so that P's recursion is twice the real part of lambda's); None when the eigenvalues
-    are real or the eigenvectors worse conditioned than PAIR_CONDITION. In closed form (the
-    general eigensolver costs more than a short record's recursion)."""
-    (a, b), (c, d) = P
+    are real or the eigenvectors worse conditioned than PAIR_CONDITION. In closed form, in
+    Python's scalars (numpy's calls on two-element arrays cost more than a short record's
+    recursion)."""
+    (a, b), (c, d) = P.tolist()
     half = 0.5 * (a - d)
     discriminant = half * half + b * c
     if not discriminant < 0:
         return None
     value = complex(0.5 * (a + d), math.sqrt(-discriminant))
-    first, second = np.array([b, value - a]), np.array([value - d, c])  # both eigenvectors
-    vector = first if abs(first[0]) + abs(first[1]) >= abs(second[0]) + abs(second[1]) else second
-    vector = vector / np.linalg.norm(vector)
-    overlap = abs(vector @ vector)  # |v^H conj(v)|: the singular values of [v, conj v] are
+    first, second = (b, value - a), (value - d, c)  # both eigenvectors
+    v0, v1 = first if abs(first[0]) + abs(first[1]) >= abs(second[0]) + abs(second[1]) else second
+    norm = math.hypot(abs(v0), abs(v1))
+    v0, v1 = v0 / norm, v1 / norm
+    overlap = abs(v0 * v0 + v1 * v1)  # |v^H conj(v)|: the singular values of [v, conj v] are
     if not overlap < 1.0 or (1.0 + overlap) > PAIR_CONDITION**2 * (1.0 - overlap):  # sqrt(1 +- it)
         return None
-    determinant = vector[0] * vector[1].conjugate() - vector[0].conjugate() * vector[1]
-    row = np.array([vector[1].conjugate(), -vector[0].conjugate()]) / determinant
-    return value, vector[:, None], row
+    determinant = v0 * v1.conjugate() - v0.conjugate() * v1
+    return value, np.array([[v0], [v1]], dtype=complex), np.array([v1.conjugate(), -v0.conjugate()]) / determinant
+
+
+def _step_maps(Phi: np.ndarray, Gamma: np.ndarray, m: int):
+    """(Phi^0..Phi^m (m + 1, order, order), K (signals, m + 1, m + 1, order)): K[j, l] maps
+    a block's m + 1 samples of signal j (a row each) to its drive's part of the state l
+    steps in, sum over i < l of Phi^(l-1-i) Gamma[j]^T [w_i, w_(i+1)]. Entries below TINY
+    are 0 (a fast mode's powers die out into slow subnormal numbers)."""
+    powers = _powers(Phi, m + 1)
+    powers[np.abs(powers) < TINY] = 0.0
+    responses = np.zeros((Gamma.shape[0], 2, m + 1, Phi.shape[0]))  # Phi^j Gamma[:, e], j < m
+    responses[:, :, :m] = np.einsum("jab,seb->seja", powers[:m], Gamma)
+    responses[np.abs(responses) < TINY] = 0.0
+    step, sample = np.arange(m + 1)[:, None], np.arange(m + 1)[None, :]
+    first = np.where(sample < step, step - 1 - sample, m)  # w_i's lag in Phi (m: none)
+    second = np.where((0 < sample) & (sample <= step), step - sample, m)  # w_(i+1)'s
+    return powers, responses[:, 0][:, first] + responses[:, 1][:, second]
+
+
+def _block_starts(Phi_m: np.ndarray, drives: np.ndarray, z0, blocks, modes, m: int, x: np.ndarray):
+    """The blocks' first states x_0..x_B of x_(b+1) = Phi^m x_b + drives[:, :, b] from z0,
+    written into x (signals, order, B + 1), Phi^m quasi-triangular with the diagonal
+    `blocks` (a complex pair's: Phi's `modes`, raised to m): from the last block up, each
+    block's recursion one lfilter for all signals, driven by the states below it. In chunks of
+    TRIANGULAR_CHUNK samples, between which states below TINY are 0: a recursion that
+    decays into subnormal numbers can stay there (the smallest one times 0.9 rounds to
+    itself), and each step on them is a hundred times slower."""
+    B, chunk = drives.shape[2], max(1, TRIANGULAR_CHUNK // m)
+    x[:, :, 0] = z0
+    for lo in range(0, B, chunk):
+        hi = min(B, lo + chunk)
+        state = x[:, :, lo]
+        state[np.abs(state) < TINY] = 0.0
+        for start, size in blocks[::-1]:
+            end = start + size
+            drive = drives[:, start:end, lo:hi] + Phi_m[start:end, end:] @ x[:, end:, lo:hi]
+            if size == 1:
+                a = Phi_m[start, start]
+                x[:, start, lo + 1 : hi + 1] = signal.lfilter(
+                    [1.0], [1.0, -a], drive[:, 0], zi=a * state[:, start, None])[0]  # fmt: skip
+                continue
+            value, vector, row = modes[start]  # the second mode is the first's conjugate
+            value = value**m
+            xi = signal.lfilter([1.0], [1.0, -value], row @ drive, zi=value * (state[:, start:end] @ row)[:, None])[0]
+            x[:, start:end, lo + 1 : hi + 1] = 2.0 * (vector * xi[:, None, :]).real
 
 
 def _triangular(Phi: np.ndarray, Gamma: np.ndarray, z0: np.ndarray, blocks, out: np.ndarray) -> bool:
     """States z_0..z_N of z_(i+1) = Phi z_i + Gamma[j]^T [w_i, w_(i+1)] for each signal j
     (Gamma (signals, 2, order)) from z0, Phi upper quasi-triangular with the diagonal
     `blocks`, written into the first `order` rows of out (signals, order + 2, N + 1), whose
-    last two rows hold each signal's samples w_0..w_N and w_1..w_N (the last repeated);
-    False (out undefined) when a 2 x 2 block is not a well-conditioned complex pair (the
-    general `_propagate` then). Each block's drive, from the states below it and the
-    samples, is one product with those rows, and its recursion one call for all signals.
-
-    In chunks of TRIANGULAR_CHUNK samples, between which states below TINY are 0: a
-    recursion that decays into subnormal numbers can stay there (the smallest one times
-    0.9 rounds to itself), and each step on them is a hundred times slower."""
+    row `order` holds each signal's samples w_0..w_N (the next row, w_1..w_N with the last
+    repeated, is left as it is); False (out undefined) when a 2 x 2 block is not a
+    well-conditioned complex pair (the general `_propagate` then). In blocks of
+    TRIANGULAR_BLOCK samples (see above): per signal, one product for the blocks' drives,
+    one scalar recursion per diagonal block over the N/m blocks (`_block_starts`), and one
+    product [x_b, W_b] [Phi^l; K_l] for all the states within them."""
     if not np.isfinite(Phi).all():
         return False
-    order, count = Phi.shape[0], Gamma.shape[0]
-    steps = []  # per block (from the last up): its mode (None for a real pole), drive weights,
-    # and the last row of out that drives it (the samples' only where the input reaches it)
-    for start, size in blocks[::-1]:
-        end = start + size
-        reach = order + 2 if Gamma[:, :, start:end].any() else order
-        weights = np.empty((count, size, reach - end))
-        weights[:, :, : order - end] = Phi[start:end, end:]
-        weights[:, :, order - end :] = np.swapaxes(Gamma[:, :, start:end], 1, 2)[:, :, : reach - order]
-        if size == 1:
-            steps.append((start, end, reach, None, weights))
-            continue
-        mode = _pair_mode(Phi[start:end, start:end])
-        if mode is None:
-            return False
-        value, vector, row = mode
-        drive = row @ weights  # the pair's first mode's drive, its real and imaginary parts
-        steps.append((start, end, reach, (value, 2.0 * vector[:, 0], row),
-                      np.stack([drive.real, drive.imag], 1)))  # fmt: skip
+    modes = {start: _pair_mode(Phi[start : start + 2, start : start + 2]) for start, size in blocks if size == 2}
+    if any(mode is None for mode in modes.values()):
+        return False
+    order, count, steps = Phi.shape[0], Gamma.shape[0], out.shape[2] - 1
     out[:, :order, 0] = z0
-    for lo in range(0, out.shape[2] - 1, TRIANGULAR_CHUNK):
-        hi = min(out.shape[2] - 1, lo + TRIANGULAR_CHUNK)
-        state = out[:, :order, lo]
-        state[np.abs(state) < TINY] = 0.0
-        for start, end, reach, mode, weights in steps:
-            below = out[:, end:reach, lo:hi]  # the states below the block, then the samples
-            if mode is None:
-                a = Phi[start, start]
-                w = (weights @ below)[:, 0]
-                out[:, start, lo + 1 : hi + 1] = signal.lfilter(
-                    [1.0], [1.0, -a], w, zi=a * state[:, start, None])[0]  # fmt: skip
-                continue
-            value, vector, row = mode  # the second mode is the first's conjugate
-            parts = weights @ below
-            w = np.empty((count, hi - lo), dtype=complex)
-            w.real, w.imag = parts[:, 0], parts[:, 1]
-            x = signal.lfilter([1.0], [1.0, -value], w, zi=value * (state[:, start:end] @ row)[:, None])[0]
-            for i in range(2):  # the states: twice the real part of vector x
-                target = out[:, start + i, lo + 1 : hi + 1]
-                np.multiply(x.real, vector[i].real, out=target)
-                target -= vector[i].imag * x.imag
+    if steps == 0:
+        return True
+    m = TRIANGULAR_BLOCK if steps >= BLOCKED_FROM * TRIANGULAR_BLOCK else 1  # (m = 1: the
+    # states are the block starts)
+    powers, K = _step_maps(Phi, Gamma, m)
+    full, B = steps // m, -(-steps // m)  # blocks of m steps, and with the shorter last one
+    V = np.zeros((count, B, order + m + 1))  # per block: [x_b, its m + 1 samples (then 0)]
+    samples = out[:, order]
+    V[:, :full, order:-1] = samples[:, : full * m].reshape(count, full, m)
+    V[:, :full, -1] = samples[:, m : full * m + 1 : m]
+    if full < B:
+        V[:, full, order : order + steps + 1 - full * m] = samples[:, full * m :]
+    x = out[:, :order] if m == 1 else np.empty((count, order, B + 1))
+    _block_starts(powers[m], np.swapaxes(V[:, :, order:] @ K[:, m], 1, 2), z0, blocks, modes, m, x)
+    if m == 1:
+        return True
+    V[:, :, :order] = np.swapaxes(x[:, :, :B], 1, 2)
+    maps = np.empty((count, order, order + m + 1, m))  # state i at step l from [x_b, W_b]
+    maps[:, :, :order] = powers[:m].transpose(1, 2, 0)
+    maps[:, :, order:] = K[:, :m].transpose(0, 3, 2, 1)
+    np.matmul(V[:, None, :full], maps, out=out[:, :order, : full * m].reshape(count, order, full, m))
+    if full < B:
+        last = V[:, None, full:] @ maps  # (signals, order, 1, m)
+        out[:, :order, full * m :] = last[:, :, 0, : steps + 1 - full * m]
+    else:
+        out[:, :order, steps] = x[:, :, B]
     return True
 
 

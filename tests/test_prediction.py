@@ -134,3 +134,38 @@ def test_schur_rows_follow_the_step_by_step_propagation(dc_drive, A):
             expected.append(x)
         scale = max(1.0, np.abs(states[j]).max())
         assert np.max(np.abs(states[j] - np.array(expected).T)) < 1e-12 * scale
+
+
+@pytest.mark.parametrize(
+    "A",
+    [_companion((-0.5 + 2j, -0.5 - 2j, -4)),
+     np.array([[0.0, 1.0, 0.5], [0.0, -1.0, 1.0], [0.0, 0.0, -2.0]]),  # an integrator
+     np.array([[-1e4, 1.0, 0.0], [0.0, -0.3, 2.0], [0.0, -2.0, -0.3]])],  # a mode that dies out
+)  # fmt: skip
+@pytest.mark.parametrize("size", [1601, 2000])
+def test_schur_rows_in_blocks_follow_the_step_by_step_propagation(dc_drive, A, size):
+    """A record long enough for `_triangular`'s blocks of samples, its steps a whole number
+    of blocks (1600) or not (1999: a shorter last block), held and linear inputs from a
+    non-zero state, a pole whose powers underflow: against a step-by-step propagation by
+    scipy's expm, to the same accuracy as the scalar recursion."""
+    from scipy import linalg
+
+    B = np.array([0.0, 0.0, 1.0])
+    h = 0.05
+    t = h * np.arange(size)
+    W = np.array([np.sin(t) + prbs(t, 1.0, 0), np.cos(3 * t), np.full(size, -1.0)])
+    holds = ("linear", "zoh", "zoh")
+    start = np.array([0.3, -0.2, 0.1])
+    V, _, rows = dc_drive._schur_rows(A, B, t, W, holds, start)
+    states = rows if V is None else V @ rows
+    augmented = np.zeros((5, 5))  # [x; w; w'] with w' held over each interval
+    augmented[:3, :3], augmented[:3, 3], augmented[3, 4] = A, B, 1.0
+    E = linalg.expm(augmented * h)
+    for j, hold in enumerate(holds):
+        slopes = np.diff(W[j]) / h if hold == "linear" else np.zeros(size - 1)
+        x, expected = start.copy(), [start]
+        for i in range(size - 1):
+            x = E[:3, :3] @ x + E[:3, 3] * W[j, i] + E[:3, 4] * slopes[i]
+            expected.append(x)
+        scale = max(1.0, np.abs(states[j]).max())
+        assert np.max(np.abs(states[j] - np.array(expected).T)) < 1e-12 * scale
