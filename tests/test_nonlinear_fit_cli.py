@@ -147,3 +147,19 @@ def test_the_small_signal_estimator_is_derived_once_per_model_and_operating_poin
     np.testing.assert_array_equal(again.k, first.k)
     linearised_start(model, t, u + 1.0, y, hold="zoh")
     assert len(derived) == 2 and derived[1]["u"] == pytest.approx(derived[0]["u"] + 1.0)
+
+
+def test_mtt_fit_exits_1_where_the_nonlinear_verdict_refuses(tmp_path, capsys):
+    """A constant pump at its steady state: the record carries next to nothing about the
+    orifices once the initial state and offset are fitted (over 99.99 % of it theirs). The
+    verdict refuses as the linear fit's does: ok False, the reason first, exit status 1."""
+    t = np.arange(60) * 5.0
+    y = 2.56 + 0.01 * np.random.default_rng(0).standard_normal(t.size)
+    data = _write(tmp_path / "flat.csv", t, np.full(t.size, 4.0), y)
+    status, out, err = run_mtt(capsys, "fit", MODEL, "--data", data, "--hold", "zoh",
+                               "--multistart", "0", "--json")  # fmt: skip
+    found = json.loads(out)
+    assert status == 1 and not found["ok"]
+    assert "poorly determined" in found["warnings"][0]
+    assert any(text.startswith("the initial states and offsets take 99.99")
+               for text in found["warnings"])  # fmt: skip
