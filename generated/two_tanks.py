@@ -3155,18 +3155,18 @@ def _realise(Theta: np.ndarray, k) -> _Realisation | None:
                         drest[:, n - 1 :: -1] @ V, dd)  # fmt: skip
 
 
-def _state_rows(F, g, t, u, hold: str, start=None) -> np.ndarray:
+def _state_rows(F, g, t, u, hold: str, start=None, steps=None) -> np.ndarray:
     """The states (order, samples), a row per state, of z' = F z + g u from `start` (None:
-    rest)."""
-    rows = _response_rows(F, g, t, u[None], (hold,), start)
+    rest); steps: t's (`_Steps.of(t)`, when the caller has them)."""
+    rows = _response_rows(F, g, t, u[None], (hold,), start, steps)
     return rows[0] if rows is not None else _responses(F, g, t, u, (hold,), start=start)[0].T
 
 
-def _forced(real: _Realisation, t, u, hold: str) -> np.ndarray:
+def _forced(real: _Realisation, t, u, hold: str, steps=None) -> np.ndarray:
     """The output from rest at the samples (exact for the hold)."""
     if real.order == 0:
         return real.d * u
-    return real.h @ _state_rows(real.F, real.g, t, u, hold) + real.d * u
+    return real.h @ _state_rows(real.F, real.g, t, u, hold, steps=steps) + real.d * u
 
 
 def _free(real: _Realisation, t: np.ndarray, steps: "_Steps") -> np.ndarray:
@@ -3243,7 +3243,7 @@ def _sensitivities(real: _Realisation, t, u, hold: str, z0) -> tuple[np.ndarray,
     return real.h @ base + real.d * u, _output_slopes(real, base, slopes, u)
 
 
-def _augmented(real: _Realisation, t, u, hold: str, z0) -> tuple[np.ndarray, np.ndarray]:
+def _augmented(real: _Realisation, t, u, hold: str, z0, steps=None) -> tuple[np.ndarray, np.ndarray]:
     """The states z (order, samples) of z' = F z + g u from z0, and their derivatives with
     respect to the unknowns with z0 held (unknowns, order, samples). The augmented state
     is [dz/dk_1; ..; dz/dk_p; z], upper quasi-triangular as F is."""
@@ -3254,7 +3254,7 @@ def _augmented(real: _Realisation, t, u, hold: str, z0) -> tuple[np.ndarray, np.
     g[count * order :] = real.g
     start = np.zeros(size)
     start[count * order :] = z0
-    rows = _state_rows(F, g, t, u, hold, start)
+    rows = _state_rows(F, g, t, u, hold, start, steps)
     return rows[count * order :], rows[: count * order].reshape(count, order, t.size)
 
 
@@ -3269,27 +3269,26 @@ def _augmented_matrix(real: _Realisation) -> np.ndarray:
     return F
 
 
-def _free_slopes(real: _Realisation, t, steps, z0: np.ndarray) -> np.ndarray:
-    """The derivatives of the free response h Phi(t_i - t_0) z0 with respect to the unknowns
-    with z0 held, (samples, unknowns): the augmented system's output rows [0, .., h, .., 0,
-    dh_j] (h in the j-th place) along its free response from [0; z0]."""
+def _free_responses(real: _Realisation, t, steps: "_Steps", slopes: bool) -> np.ndarray:
+    """The free responses h Phi(t_i - t_0) e_j at the samples, a row per state j, and
+    (`slopes`) beside them their derivatives with respect to the unknowns with the initial
+    state held: (order, 1 [+ unknowns], samples). The derivatives are the augmented
+    system's output rows [0, .., h, .., 0, dh_i] (h in the i-th place) along its free
+    response from [0; e_j], whose last block is the free response itself (row [0, .., 0,
+    h]): one matrix exponential and one set of powers for both."""
     count, order = len(real.dd), real.order
-    H = np.zeros((count, order * (count + 1)))
-    for j in range(count):
-        H[j, j * order : (j + 1) * order] = real.h
-    H[:, count * order :] = real.dh
-    start = np.zeros(order * (count + 1))
-    start[count * order :] = z0
-    return _free_along(_augmented_matrix(real), H, t, steps, start).T
-
-
-def _free_along(F: np.ndarray, H: np.ndarray, t: np.ndarray, steps: "_Steps", start) -> np.ndarray:
-    """H Phi(t_i - t_0) start at the samples, (rows, samples): `_free_rows` for one initial
-    state, by the same blocks (regular sampling: R_(qL + j) = H Phi^j (Phi^L)^q start, the
-    block starts vectors), without the response to every state."""
+    F, H = real.F, real.h[None]
+    if slopes:
+        F = _augmented_matrix(real)
+        H = np.zeros((1 + count, order * (count + 1)))
+        H[0, count * order :] = real.h
+        for j in range(count):
+            H[1 + j, j * order : (j + 1) * order] = real.h
+        H[1:, count * order :] = real.dh
     if steps.index is not None:
-        return _free_rows(F, H, t, steps, F.shape[0]) @ start
-    return _orbits(linalg.expm(F * steps.values[0]), H, start[:, None], t.size)[0]
+        return _free_rows(F, H, t, steps, order).transpose(2, 0, 1)
+    starts = np.eye(F.shape[0])[:, F.shape[0] - order :]  # [0; e_j]
+    return _orbits(linalg.expm(F * steps.values[0]), H, starts, t.size)
 
 
 def _orbits(Phi: np.ndarray, H: np.ndarray, starts: np.ndarray, count: int) -> np.ndarray:
@@ -3302,15 +3301,23 @@ def _orbits(Phi: np.ndarray, H: np.ndarray, starts: np.ndarray, count: int) -> n
     blocks = -(-count // length)
     begins = _powers(powers[length], blocks) @ starts  # (blocks, size, columns)
     begins[np.abs(begins) < TINY] = 0.0
-    ends = (H @ powers[:length]).transpose(2, 1, 0).reshape(size, rows * length)
-    product = begins.transpose(2, 0, 1).reshape(columns * blocks, size) @ ends
-    return product.reshape(columns, blocks, rows, length).transpose(0, 2, 1, 3).reshape(
-        columns, rows, blocks * length)[:, :, :count]  # fmt: skip
+    ends = (H @ powers[:length]).transpose(1, 2, 0).copy()  # (rows, size, L)
+    begins = begins.transpose(2, 0, 1).copy()  # (columns, blocks, size)
+    out = np.empty((columns, rows, blocks * length))
+    for c in range(columns):  # each orbit's row written in place (no transposed copies)
+        for r in range(rows):
+            np.matmul(begins[c], ends[r], out=out[c, r].reshape(blocks, length))
+    return out[:, :, :count]
 
 
 def _output_slopes(real: _Realisation, z, dz, u) -> np.ndarray:
     """d/dk of y = h z + d u (samples, unknowns), from the states z and their derivatives."""
-    return (dz.transpose(0, 2, 1) @ real.h + real.dh @ z + np.outer(real.dd, u)).T
+    return _output_slope_rows(real, z, dz, u).T
+
+
+def _output_slope_rows(real: _Realisation, z, dz, u) -> np.ndarray:
+    """`_output_slopes` as rows (unknowns, samples)."""
+    return real.h @ dz + real.dh @ z + np.outer(real.dd, u)
 
 
 def _with_nuisances(t, u, y, k, *, hold: str, offset: bool, initial_state: bool, known: dict):
@@ -3612,11 +3619,12 @@ class NoiseModel:
         na = self.orders[0]
         return replace(self, ar=np.r_[1.0, p[:na]], ma=np.r_[1.0, p[na:]])
 
-    def whiten(self, x: np.ndarray) -> np.ndarray:
-        """D(q)/C(q) x along the first axis, from rest (the prediction errors of x)."""
+    def whiten(self, x: np.ndarray, axis: int = 0) -> np.ndarray:
+        """D(q)/C(q) x along the axis (the first by default), from rest (the prediction
+        errors of x)."""
         if self.orders == (0, 0):
             return x
-        return signal.lfilter(self.ar, self.ma, x, axis=0)
+        return signal.lfilter(self.ar, self.ma, x, axis=axis)
 
     def record(self) -> dict:
         """Plain values for JSON."""
@@ -3900,24 +3908,35 @@ class _Projection:
     factorisation of X^T X while that is well conditioned (below GRAM_CONDITION, where one
     correction leaves an error of order (condition eps)^2): as accurate as projecting with
     Q, without forming Q. Columns that depend on the others (an offset beside an
-    integrator's free response) are left out; `rank` counts the rest."""
+    integrator's free response) are left out; `rank` counts the rest. The arithmetic runs
+    on X^T's rows (`of_rows` takes them as they are; `fit_rows` its signals as rows), whose
+    products BLAS runs fastest."""
 
     def __init__(self, X: np.ndarray) -> None:
-        XT = np.ascontiguousarray(X.T)  # (columns, samples): the products below run on rows
-        gram = XT @ np.ascontiguousarray(X)  # (BLAS is slow on the other layouts of it)
+        self._factorise(np.ascontiguousarray(X.T))
+
+    @classmethod
+    def of_rows(cls, XT: np.ndarray) -> "_Projection":
+        """The projection on the rows of XT (columns, samples), C-contiguous."""
+        projection = cls.__new__(cls)
+        projection._factorise(XT)
+        return projection
+
+    def _factorise(self, XT: np.ndarray) -> None:
+        gram = XT @ XT.copy().T  # (a copy: numpy's syrk for X^T X runs slower than gemm here)
         scale = np.sqrt(np.diag(gram))
         scale = np.where(scale > 0, scale, 1.0)
         gram = gram / np.outer(scale, scale)
         R = None
-        values = np.linalg.eigvalsh(gram) if X.shape[1] else np.zeros(0)  # (its condition)
-        if X.shape[1] and values[0] > 0 and values[-1] < GRAM_CONDITION * values[0]:  # R from it
+        values = np.linalg.eigvalsh(gram) if XT.shape[0] else np.zeros(0)  # (its condition)
+        if XT.shape[0] and values[0] > 0 and values[-1] < GRAM_CONDITION * values[0]:  # R from it
             R = np.linalg.cholesky(gram).T
         if R is None or not np.isfinite(R).all():
-            R = np.linalg.qr(X / scale, mode="r")
+            R = np.linalg.qr(XT.T / scale, mode="r")
         size = np.abs(np.diag(R))
-        self.kept = size > ROUNDING * X.shape[0] * max(size.max(initial=0.0), 1e-300)
+        self.kept = size > ROUNDING * XT.shape[1] * max(size.max(initial=0.0), 1e-300)
         if not self.kept.all():
-            XT = XT[self.kept]
+            XT = np.ascontiguousarray(XT[self.kept])
             scale = scale[self.kept]
             R = np.linalg.qr(XT.T / scale, mode="r")
         self.XT = XT
@@ -3925,32 +3944,38 @@ class _Projection:
         # R^-1 of X itself (X = Q R): a small triangular matrix, applied by products
         self.inverse = np.linalg.inv(R) / scale[:, None] if self.rank else np.zeros((0, 0))
 
-    def _solve(self, W: np.ndarray) -> np.ndarray:
-        return self.inverse @ (self.inverse.T @ (self.XT @ W))
-
     def fit(self, W: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """(coefficients (columns of X, columns of W), W less X times them)."""
-        coefficients = np.zeros((self.kept.size, W.shape[1]))
+        coefficients, rest = self.fit_rows(np.ascontiguousarray(W.T))
+        return coefficients.T, rest.T
+
+    def fit_rows(self, WT: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """`fit` of the signals that are WT's rows: (coefficients (rows of WT, columns of
+        X), WT less them times X^T)."""
+        coefficients = np.zeros((WT.shape[0], self.kept.size))
         if not self.rank:
-            return coefficients, W
-        c = self._solve(W)
-        c += self._solve(W - self.XT.T @ c)
-        coefficients[self.kept] = c
-        return coefficients, W - self.XT.T @ c
+            return coefficients, WT
+        c = self._solve_rows(WT)
+        c += self._solve_rows(WT - c @ self.XT)
+        coefficients[:, self.kept] = c
+        return coefficients, WT - c @ self.XT
+
+    def _solve_rows(self, WT: np.ndarray) -> np.ndarray:
+        return ((WT @ self.XT.T) @ self.inverse) @ self.inverse.T
 
 
 def _lagged(x: np.ndarray, lags: int) -> np.ndarray:
-    """Columns x delayed by 1..lags samples (zeros before the record)."""
-    out = np.zeros((x.size, lags))
+    """Rows x delayed by 1..lags samples (zeros before the record)."""
+    out = np.zeros((lags, x.size))
     for i in range(1, lags + 1):
-        out[i:, i - 1] = x[:-i]
+        out[i - 1, i:] = x[:-i]
     return out
 
 
 @dataclass(frozen=True)
 class _Basis:
     """A record's output from rest at a point k where its Jacobian was computed in full,
-    and its derivative by k (samples, 1): what `_prediction` needs to carry the Jacobian to
+    and its derivative by k (1, samples): what `_prediction` needs to carry the Jacobian to
     a nearby point (`_updated_slopes`)."""
 
     k: float
@@ -3983,73 +4008,73 @@ def _prediction(Theta, record, k, noise: NoiseModel, settings, jacobian: bool, k
     update = (jacobian and SCALAR and real.order and basis is not None and basis.k != k
               and abs(k - basis.k) <= UPDATE_REACH * abs(basis.k))  # fmt: skip
     augmented = jacobian and real.order and not update  # the output and its slopes at once
-    free = None  # the free responses (initial state), a column per state
+    free = None  # the free responses (initial state), a row per state, with their slopes
     with np.errstate(all="ignore"):
         if augmented:
-            z, dz = _augmented(real, t, u, hold, np.zeros(real.order))
-            forced, slopes = real.h @ z + real.d * u, _output_slopes(real, z, dz, u)
+            z, dz = _augmented(real, t, u, hold, np.zeros(real.order), steps)
+            forced, slopes = real.h @ z + real.d * u, _output_slope_rows(real, z, dz, u)
         else:
-            forced = _forced(real, t, u, hold)
+            forced = _forced(real, t, u, hold, steps)
         if initial_state and real.order:
-            free = _free(real, t, steps)
-        # the nuisances' columns (offset, free responses) in one contiguous array: the
-        # projection's products then run on it as it is
-        Xi = np.empty((t.size, int(offset) + (0 if free is None else free.shape[1])))
+            free = _free_responses(real, t, steps, jacobian)
+        # the nuisances' rows (offset, free responses) in one contiguous array: the
+        # projection's products run on it as it is
+        XT = np.empty((int(offset) + (0 if free is None else free.shape[0]), t.size))
         if offset:
-            Xi[:, 0] = 1.0
+            XT[0] = 1.0
         if free is not None:
-            Xi[:, int(offset) :] = free
-        error, white = noise.whiten(y - forced), noise.whiten(Xi) if Xi.shape[1] else Xi
+            XT[int(offset) :] = free[:, 0]
+        error, white = noise.whiten(y - forced), noise.whiten(XT, -1) if XT.shape[0] else XT
     if not (np.isfinite(error).all() and np.isfinite(white).all()):
-        return _Prediction(math.inf, t.size, Xi.shape[1]), basis
-    projection = _Projection(white)
-    nu, eps = projection.fit(error[:, None])
-    nu, eps = nu[:, 0], eps[:, 0]
+        return _Prediction(math.inf, t.size, XT.shape[0]), basis
+    projection = _Projection.of_rows(white)
+    nu, eps = projection.fit_rows(error[None])
+    nu, eps = nu[0], eps[0]
     rss = float(eps @ eps)
     if not (jacobian or keep):
         return _Prediction(rss, t.size, projection.rank, deviations=t.size * float(np.var(y))), basis
     value, z0 = _nuisance_values(nu, real, offset, initial_state)
     if not jacobian:
-        fitted = forced + Xi @ nu
+        fitted = forced + nu @ XT
         return _Prediction(rss, t.size, projection.rank, offset=value, state=real.V @ z0,
                            fitted=fitted, residuals=y - fitted), basis  # fmt: skip
-    held = forced + Xi[:, int(offset) :] @ z0 if free is not None else forced  # z0's response
-    psi = change = None
+    output = forced + z0 @ free[:, 0] if free is not None else forced  # z0's response held
+    change = None
     with np.errstate(all="ignore"):
-        if update:  # (the free response's slopes along z0 in full: they need no recursion)
+        if update:
             psi, change = _updated_slopes(basis, k, forced)
-            output, psi = held, psi if free is None else psi + _free_slopes(real, t, steps, z0)
-        elif not augmented:
-            output, psi = _sensitivities(real, t, u, hold, z0)
-        elif free is not None:  # the free response's slopes with z0 held
-            output, psi = held, slopes + _free_slopes(real, t, steps, z0)
-        else:
-            output, psi = forced, slopes
+        elif augmented:
+            psi = slopes
+        else:  # a static model
+            psi = np.outer(real.dd, u)
+        if free is not None:  # the free response's slopes with z0 held
+            psi = psi + np.tensordot(z0, free[:, 1:], 1)
     fitted = output + value
     residuals = y - fitted
     na, nc = noise.orders
-    columns = [-noise.whiten(psi)]
+    rows = [-noise.whiten(psi, -1)]
     if na:
-        columns.append(_lagged(signal.lfilter([1.0], noise.ma, residuals), na))
+        rows.append(_lagged(signal.lfilter([1.0], noise.ma, residuals), na))
     if nc:
-        columns.append(-_lagged(signal.lfilter([1.0], noise.ma, eps), nc))
+        rows.append(-_lagged(signal.lfilter([1.0], noise.ma, eps), nc))
     if change is not None:
-        columns.append(noise.whiten(change))
-    J = np.concatenate(columns, 1)
-    free = J[:, : len(UNKNOWNS)].T @ J[:, : len(UNKNOWNS)]
-    J = projection.fit(J)[1]
+        rows.append(noise.whiten(change, -1))
+    JT = np.concatenate(rows, 0)
+    free = JT[: len(UNKNOWNS)] @ JT[: len(UNKNOWNS)].T
+    JT = projection.fit_rows(JT)[1]
     if change is not None:
-        J, moved = J[:, :-1], J[:, -1]
-        if not moved @ moved <= UPDATE_CHANGE**2 * (J[:, 0] @ J[:, 0]):  # too far: in full
+        JT, moved = JT[:-1], JT[-1]
+        if not moved @ moved <= UPDATE_CHANGE**2 * (JT[0] @ JT[0]):  # too far: in full
             return _prediction(Theta, record, k, noise, settings, jacobian, keep)
-    gram = J.T @ J
+    gram = JT @ JT.T
     if augmented and SCALAR:  # the new basis, where the record determines k well
         with np.errstate(all="ignore"):
             se = math.sqrt(max(rss / t.size * np.linalg.pinv(gram)[0, 0], 0.0))
         basis = _Basis(float(k), forced, slopes) if se <= NARROW * abs(k) else None
+    spread = y - y.mean()
     return _Prediction(
-        rss, t.size, projection.rank, gram, J.T @ eps, free,
-        output_rss=float(residuals @ residuals), deviations=float(np.sum((y - y.mean()) ** 2)),
+        rss, t.size, projection.rank, gram, JT @ eps, free,
+        output_rss=float(residuals @ residuals), deviations=float(spread @ spread),
         whiteness=0.0 if keep else _whiteness(eps), figures=not keep,
         independence=0.0 if keep else _independence(eps, u), offset=value, state=real.V @ z0,
         fitted=fitted if keep else None, residuals=residuals if keep else None,
@@ -4062,8 +4087,9 @@ def _updated_slopes(basis: _Basis, k: float, forced: np.ndarray) -> tuple:
     - psi(k_b) (the mean of psi over the interval is the difference quotient, psi(k_b) and
     psi(k) its ends: exact to second order in k - k_b), where a full Jacobian runs the
     augmented system with twice the states. change = psi(k) - psi(k_b), the first-order
-    part: its size, projected, bounds what the update leaves out (about its square)."""
-    change = (2.0 / (k - basis.k)) * (forced - basis.forced)[:, None] - 2.0 * basis.slopes
+    part: its size, projected, bounds what the update leaves out (about its square). Rows
+    (1, samples)."""
+    change = (2.0 / (k - basis.k)) * (forced - basis.forced)[None] - 2.0 * basis.slopes
     return basis.slopes + change, change
 
 
