@@ -3301,11 +3301,14 @@ def _orbits(Phi: np.ndarray, H: np.ndarray, starts: np.ndarray, count: int) -> n
     begins[np.abs(begins) < TINY] = 0.0
     ends = (H @ powers[:length]).transpose(1, 2, 0).copy()  # (rows, size, L)
     begins = begins.transpose(2, 0, 1).copy()  # (columns, blocks, size)
-    out = np.empty((columns, rows, blocks * length))
-    for c in range(columns):  # each orbit's row written in place (no transposed copies)
+    out = np.empty((columns, rows, count))  # each orbit's row written in place (contiguous)
+    full, rest = divmod(count, length)
+    for c in range(columns):
         for r in range(rows):
-            np.matmul(begins[c], ends[r], out=out[c, r].reshape(blocks, length))
-    return out[:, :, :count]
+            np.matmul(begins[c, :full], ends[r], out=out[c, r, : full * length].reshape(full, length))
+            if rest:
+                out[c, r, full * length :] = begins[c, full] @ ends[r, :, :rest]
+    return out
 
 
 def _output_slopes(real: _Realisation, z, dz, u) -> np.ndarray:
@@ -4036,7 +4039,6 @@ def _prediction(Theta, record, k, noise: NoiseModel, settings, jacobian: bool, k
         fitted = forced + nu @ XT
         return _Prediction(rss, t.size, projection.rank, offset=value, state=real.V @ z0,
                            fitted=fitted, residuals=y - fitted), basis  # fmt: skip
-    output = forced + z0 @ free[:, 0] if free is not None else forced  # z0's response held
     change = None
     with np.errstate(all="ignore"):
         if update:
@@ -4045,8 +4047,10 @@ def _prediction(Theta, record, k, noise: NoiseModel, settings, jacobian: bool, k
             psi = slopes
         else:  # a static model
             psi = np.outer(real.dd, u)
-        if free is not None:  # the free response's slopes with z0 held
-            psi = psi + np.tensordot(z0, free[:, 1:], 1)
+        output = forced
+        if free is not None:  # z0's response and its slopes with z0 held, in one product
+            along = (z0 @ free.reshape(free.shape[0], -1)).reshape(free.shape[1:])
+            output, psi = forced + along[0], psi + along[1:]
     fitted = output + value
     residuals = y - fitted
     na, nc = noise.orders
