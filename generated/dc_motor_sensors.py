@@ -3269,13 +3269,13 @@ def _augmented_matrix(real: _Realisation) -> np.ndarray:
     return F
 
 
-def _free_responses(real: _Realisation, t, steps: "_Steps", slopes: bool) -> np.ndarray:
-    """The free responses h Phi(t_i - t_0) e_j at the samples, a row per state j, and
-    (`slopes`) beside them their derivatives with respect to the unknowns with the initial
-    state held: (order, 1 [+ unknowns], samples). The derivatives are the augmented
-    system's output rows [0, .., h, .., 0, dh_i] (h in the i-th place) along its free
-    response from [0; e_j], whose last block is the free response itself (row [0, .., 0,
-    h]): one matrix exponential and one set of powers for both."""
+def _free_responses(real: _Realisation, t, steps: "_Steps", slopes: bool):
+    """(rows, along): the free responses h Phi(t_i - t_0) e_j at the samples, a row per
+    state j (order, samples), and (`slopes`; else None) the function of z0 that gives the
+    derivatives of z0's free response with respect to the unknowns with z0 held (unknowns,
+    samples): the augmented system's output rows [0, .., h, .., 0, dh_i] (h in the i-th
+    place) along its free response from [0; z0], whose last block is the free response
+    itself (row [0, .., 0, h]): one matrix exponential and one set of powers for both."""
     count, order = len(real.dd), real.order
     F, H = real.F, real.h[None]
     if slopes:
@@ -3285,25 +3285,41 @@ def _free_responses(real: _Realisation, t, steps: "_Steps", slopes: bool) -> np.
         for j in range(count):
             H[1 + j, j * order : (j + 1) * order] = real.h
         H[1:, count * order :] = real.dh
+    size = F.shape[0]
     if steps.index is not None:
-        return _free_rows(F, H, t, steps, order).transpose(2, 0, 1)
-    starts = np.eye(F.shape[0])[:, F.shape[0] - order :]  # [0; e_j]
-    return _orbits(linalg.expm(F * steps.values[0]), H, starts, t.size)
+        found = _free_rows(F, H, t, steps, order).transpose(2, 0, 1)  # (state, row, sample)
+        return found[:, 0], (lambda z0: np.tensordot(z0, found[:, 1:], 1)) if slopes else None
+    maps = _orbit_maps(linalg.expm(F * steps.values[0]), t.size)
+    rows = _orbits(maps, H[:1], np.eye(size)[:, size - order :], t.size)[:, 0]
+
+    def along(z0: np.ndarray) -> np.ndarray:
+        start = np.zeros((size, 1))
+        start[size - order :, 0] = z0
+        return _orbits(maps, H[1:], start, t.size)[0]
+
+    return rows, along if slopes else None
 
 
-def _orbits(Phi: np.ndarray, H: np.ndarray, starts: np.ndarray, count: int) -> np.ndarray:
-    """H Phi^i s for i = 0 .. count - 1 and each column s of starts, (columns, rows, count):
-    by blocks of L samples, H Phi^j (Phi^L)^q s at sample qL + j, the block starts vectors
-    (below TINY: 0) and the powers Phi^0..Phi^(L-1) one stacked product (`_powers`)."""
-    size, columns, rows = Phi.shape[0], starts.shape[1], H.shape[0]
+def _orbit_maps(Phi: np.ndarray, count: int) -> tuple:
+    """(L, Phi^0..Phi^L, (Phi^L)^0..(Phi^L)^(blocks - 1)): what `_orbits` of count samples
+    needs of Phi, by doubling (`_powers`), for any rows and starts."""
     length = max(64, math.isqrt(count))
     powers = _powers(Phi, length + 1)
-    blocks = -(-count // length)
-    begins = _powers(powers[length], blocks) @ starts  # (blocks, size, columns)
+    return length, powers, _powers(powers[length], -(-count // length))
+
+
+def _orbits(maps: tuple, H: np.ndarray, starts: np.ndarray, count: int) -> np.ndarray:
+    """H Phi^i s for i = 0 .. count - 1 and each column s of starts, (columns, rows, count),
+    from `_orbit_maps`: by blocks of L samples, H Phi^j (Phi^L)^q s at sample qL + j, the
+    block starts vectors (below TINY: 0), each orbit's row one product with the stacked
+    H Phi^j, written in place."""
+    length, powers, blocks = maps
+    columns, rows = starts.shape[1], H.shape[0]
+    begins = blocks @ starts  # (blocks, size, columns)
     begins[np.abs(begins) < TINY] = 0.0
     ends = (H @ powers[:length]).transpose(1, 2, 0).copy()  # (rows, size, L)
     begins = begins.transpose(2, 0, 1).copy()  # (columns, blocks, size)
-    out = np.empty((columns, rows, count))  # each orbit's row written in place (contiguous)
+    out = np.empty((columns, rows, count))
     full, rest = divmod(count, length)
     for c in range(columns):
         for r in range(rows):
@@ -3995,23 +4011,24 @@ def _record_prediction(Theta, record, k, noise: NoiseModel, settings, jacobian: 
 
 
 def _prediction(Theta, record, k, noise: NoiseModel, settings, jacobian: bool, keep: bool = False,
-                basis: _Basis | None = None) -> tuple[_Prediction, _Basis | None]:  # fmt: skip
+                basis: _Basis | None = None, steps=None) -> tuple[_Prediction, _Basis | None]:  # fmt: skip
     """`_record_prediction`, and the record's basis for later updates: with `jacobian`, the
     Jacobian by k is carried from `basis` (the record's outputs at a point near k) by
     `_updated_slopes` where that is accurate, else computed in full, which gives the new
     basis (one unknown; otherwise None). The basis is returned as it is when not replaced.
     With `keep` (the residuals kept) the whiteness and independence figures are left to
-    `_Prediction.with_figures`: a fit needs them at its estimate alone."""
+    `_Prediction.with_figures`: a fit needs them at its estimate alone. steps: the record's
+    `_Steps` (None: found here)."""
     t, u, y = record
     offset, initial_state, hold = settings["offset"], settings["initial_state"], settings["hold"]
     real = _realise(Theta, k)
     if real is None or not _predictor_stable(real):
         return _Prediction(math.inf, t.size, 0), basis
-    steps = _Steps.of(t) if real.order else None
+    steps = steps if steps is not None or not real.order else _Steps.of(t)
     update = (jacobian and SCALAR and real.order and basis is not None and basis.k != k
               and abs(k - basis.k) <= UPDATE_REACH * abs(basis.k))  # fmt: skip
     augmented = jacobian and real.order and not update  # the output and its slopes at once
-    free = None  # the free responses (initial state), a row per state, with their slopes
+    free = along = None  # the free responses (initial state), a row per state; their slopes
     with np.errstate(all="ignore"):
         if augmented:
             z, dz = _augmented(real, t, u, hold, np.zeros(real.order), steps)
@@ -4019,14 +4036,14 @@ def _prediction(Theta, record, k, noise: NoiseModel, settings, jacobian: bool, k
         else:
             forced = _forced(real, t, u, hold, steps)
         if initial_state and real.order:
-            free = _free_responses(real, t, steps, jacobian)
+            free, along = _free_responses(real, t, steps, jacobian)
         # the nuisances' rows (offset, free responses) in one contiguous array: the
         # projection's products run on it as it is
         XT = np.empty((int(offset) + (0 if free is None else free.shape[0]), t.size))
         if offset:
             XT[0] = 1.0
         if free is not None:
-            XT[int(offset) :] = free[:, 0]
+            XT[int(offset) :] = free
         error, white = noise.whiten(y - forced), noise.whiten(XT, -1) if XT.shape[0] else XT
     if not (np.isfinite(error).all() and np.isfinite(white).all()):
         return _Prediction(math.inf, t.size, XT.shape[0]), basis
@@ -4050,9 +4067,8 @@ def _prediction(Theta, record, k, noise: NoiseModel, settings, jacobian: bool, k
         else:  # a static model
             psi = np.outer(real.dd, u)
         output = forced
-        if free is not None:  # z0's response and its slopes with z0 held, in one product
-            along = (z0 @ free.reshape(free.shape[0], -1)).reshape(free.shape[1:])
-            output, psi = forced + along[0], psi + along[1:]
+        if free is not None:  # z0's response, and its slopes with z0 held
+            output, psi = forced + z0 @ free, psi + along(z0)
     fitted = output + value
     residuals = y - fitted
     na, nc = noise.orders
@@ -4069,7 +4085,7 @@ def _prediction(Theta, record, k, noise: NoiseModel, settings, jacobian: bool, k
     if change is not None:
         JT, moved = JT[:-1], JT[-1]
         if not moved @ moved <= UPDATE_CHANGE**2 * (JT[0] @ JT[0]):  # too far: in full
-            return _prediction(Theta, record, k, noise, settings, jacobian, keep)
+            return _prediction(Theta, record, k, noise, settings, jacobian, keep, None, steps)
     gram = JT @ JT.T
     if augmented and SCALAR:  # the new basis, where the record determines k well
         with np.errstate(all="ignore"):
@@ -4668,6 +4684,7 @@ class Records:
         self._kept: dict = {}  # the last few answers of `prediction`, by their question
         self._bases: tuple = (None, [])  # (settings, each record's `_Basis`): the outputs at
         # the last point whose Jacobian was computed in full, from which nearby ones are carried
+        self._steps: list | None = None  # each record's `_Steps`, found once
 
     def shapes(self) -> list[Shape]:
         return [Shape.of(t, u) for t, u, _ in self.records]
@@ -4707,8 +4724,10 @@ class Records:
                 self._kept.pop(next(iter(self._kept)))
             same = key[0][1:]  # (a basis serves the same settings only)
             bases = self._bases[1] if self._bases[0] == same else [None] * len(self.records)
-            answers = [_prediction(Theta, record, k, noise, settings, jacobian, keep, basis)
-                       for record, basis in zip(self.records, bases, strict=True)]  # fmt: skip
+            if self._steps is None:
+                self._steps = [_Steps.of(t) if t.size > 1 else None for t, _, _ in self.records]
+            answers = [_prediction(Theta, record, k, noise, settings, jacobian, keep, basis, steps)
+                       for record, basis, steps in zip(self.records, bases, self._steps, strict=True)]  # fmt: skip
             self._bases = (same, [basis for _, basis in answers])
             self._kept[key] = [part for part, _ in answers]
         if figures:
