@@ -3229,15 +3229,6 @@ def _nuisance_values(nu: np.ndarray, real: _Realisation, offset: bool, initial_s
     return value, z0
 
 
-def _sensitivities(real: _Realisation, t, u, hold: str, z0) -> tuple[np.ndarray, np.ndarray]:
-    """The output from the initial state z0 with input u (without offset), and its
-    derivatives with respect to the unknowns with z0 held: (samples,), (samples, unknowns)."""
-    if real.order == 0:
-        return real.d * u, np.outer(u, real.dd)
-    base, slopes = _augmented(real, t, u, hold, z0)
-    return real.h @ base + real.d * u, _output_slopes(real, base, slopes, u)
-
-
 def _augmented(real: _Realisation, t, u, hold: str, z0, steps=None) -> tuple[np.ndarray, np.ndarray]:
     """The states z (order, samples) of z' = F z + g u from z0, and their derivatives with
     respect to the unknowns with z0 held (unknowns, order, samples). The augmented state
@@ -3856,7 +3847,7 @@ def _choose_noise(Theta, records, k, setting: str, settings, count: int) -> Nois
 # initial state of each record eliminated by linear least squares at every point (variable
 # projection), the noise model D, C (`NoiseModel`; white: eps is the output error) fitted
 # with k. Gauss-Newton steps with Levenberg-Marquardt damping use the analytic derivatives:
-# with respect to k from the augmented system (`_sensitivities`), with respect to D and C by
+# with respect to k from the augmented system (`_augmented`), with respect to D and C by
 # filtering; with the nuisances held at their fitted values (Kaufman's variant of variable
 # projection, whose gradient is the projected cost's own). The steps start from the global
 # minimiser of the paper's least-squares cost (a polynomial in k, `_global_minimisers` or

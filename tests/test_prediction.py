@@ -72,7 +72,8 @@ def test_sensitivities_match_finite_differences(dc_motor):
     u = prbs(t, 0.3, 6)
     k = np.array([1.0, 10.0])
     real = dc_motor._realise(dc_motor.theta(), k)
-    _, slopes = dc_motor._sensitivities(real, t, u, "zoh", np.zeros(real.order))
+    base, dz = dc_motor._augmented(real, t, u, "zoh", np.zeros(real.order))
+    slopes = dc_motor._output_slopes(real, base, dz, u)
     for j in range(2):
         step = np.zeros(2)
         step[j] = 1e-3 * k[j]
