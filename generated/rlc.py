@@ -1389,52 +1389,73 @@ def _evaluate(T: np.ndarray, x: np.ndarray) -> np.ndarray:
     return R
 
 
-_LETTERS = "abcdefghijlmopqrstuvwxyz"[: len(SHAPE)]  # the tensor's axes, for einsum (not n, k)
-_JET = (_LETTERS + "," + ",".join("n" + letter.upper() + letter for letter in _LETTERS)
-        + "->n" + _LETTERS.upper())  # fmt: skip
-_JET_GRADIENT = np.ravel_multi_index(tuple(_UNIT.T), (3,) * len(SHAPE))  # e_i among (3,)*p
-_JET_HESSIAN = np.array([np.ravel_multi_index(tuple((_UNIT[i] + _UNIT).T), (3,) * len(SHAPE))
-                         for i in range(len(UNKNOWNS))])  # e_i + e_j  # fmt: skip
-_VALUES = _LETTERS + "," + ",".join("nk" + letter for letter in _LETTERS) + "->nk"
+_EXPONENTS_FLAT = np.array(np.unravel_index(np.arange(math.prod(SHAPE)), SHAPE))  # (p, prod(SHAPE))
+_AXES = np.arange(len(SHAPE))[:, None]
 
 
-def _power_table(x: np.ndarray, size: int) -> np.ndarray:
-    """x^j, j = 0..size - 1, along a new last axis."""
-    out = np.empty(x.shape + (size,))
-    out[..., 0] = 1.0
-    for j in range(1, size):
+def _jet_layout() -> tuple[np.ndarray, np.ndarray]:
+    """Where each term of the flattened tensor's value, gradient and Hessian (1 + p + p^2
+    rows: 1, d/dk_i, d2/dk_i dk_j) takes its power of each coordinate (index into a table
+    x^(j - 1), slot 0 zero: a derivative of a lower power vanishes), and its factor (the
+    falling factorials of the exponents)."""
+    p = len(SHAPE)
+    orders = np.concatenate([np.zeros((1, p), dtype=int), _UNIT, (_UNIT[:, None] + _UNIT).reshape(-1, p)])
+    lowered = _EXPONENTS_FLAT[None] - orders[:, :, None]  # (rows, p, prod(SHAPE))
+    factors = np.ones(lowered.shape)
+    for order in (1, 2):
+        factors *= np.where(orders[:, :, None] >= order, _EXPONENTS_FLAT[None] - order + 1, 1)
+    return np.maximum(lowered + 1, 0), np.where(lowered >= 0, factors, 0.0).prod(1)
+
+
+_JET_PLACES, _JET_FACTORS = _jet_layout()
+
+
+def _power_table(x: np.ndarray) -> np.ndarray:
+    """(..., p, max(SHAPE) + 1): 0 then x_i^j, j = 0..max(SHAPE) - 1, for each coordinate."""
+    out = np.zeros(x.shape + (max(SHAPE) + 1,))
+    out[..., 1] = 1.0
+    for j in range(2, out.shape[-1]):
         np.multiply(out[..., j - 1], x, out=out[..., j])
     return out
 
 
+def _monomials(x: np.ndarray) -> np.ndarray:
+    """The terms of a flattened tensor at the points x (..., p): (..., prod(SHAPE)), so that
+    `_monomials(x) @ T` is T there."""
+    return _power_table(x)[..., _AXES, _EXPONENTS_FLAT + 1].prod(-2)
+
+
 def _jets(T: np.ndarray, x: np.ndarray):
     """Value (n,), gradient (n, p) and Hessian (n, p, p) of one flattened tensor T at the
-    points x (n, p): the tensor contracted on each axis with the powers of that coordinate
-    and their first two derivatives, one product for all the points (what `_local_form` of
-    `_shift` gives, without the whole Taylor tensor)."""
-    rows = []
-    for axis, size in enumerate(SHAPE):
-        P = np.zeros((x.shape[0], 3, size))
-        powers = _power_table(x[:, axis], size)
-        j = np.arange(size, dtype=float)
-        P[:, 0] = powers
-        P[:, 1, 1:] = j[1:] * powers[:, :-1]
-        P[:, 2, 2:] = (j[2:] * j[1:-1]) * powers[:, :-2]
-        rows.append(P)
-    jets = np.einsum(_JET, T.reshape(SHAPE), *rows).reshape(x.shape[0], -1)
-    return jets[:, 0], jets[:, _JET_GRADIENT], jets[:, _JET_HESSIAN]
-
-
-def _values(T: np.ndarray, x: np.ndarray) -> np.ndarray:
-    """One flattened tensor T at the points x (n, trials, p): (n, trials), from the powers
-    of each coordinate (the arithmetic of `_jets`' values)."""
-    return np.einsum(_VALUES, T.reshape(SHAPE),
-                     *[_power_table(x[..., axis], size) for axis, size in enumerate(SHAPE)])  # fmt: skip
+    points x (n, p): each derivative's terms at the points, weighted by T, one product for
+    all the points (what `_local_form` of `_shift` gives, without the whole Taylor tensor)."""
+    p = x.shape[1]
+    terms = _power_table(x)[:, _AXES, _JET_PLACES].prod(-2)  # (n, rows, prod(SHAPE))
+    jets = np.einsum("nrt,rt->nr", terms, _JET_FACTORS * T)
+    return jets[:, 0], jets[:, 1 : 1 + p], jets[:, 1 + p :].reshape(-1, p, p)
 
 
 def _lowest_curvature(H: np.ndarray) -> np.ndarray:
-    """The smallest eigenvalue of each symmetric matrix H (..., p, p)."""
-    return np.linalg.eigvalsh(0.5 * (H + np.swapaxes(H, -1, -2)))[..., 0]
+    """The smallest eigenvalue of each symmetric matrix H (..., p, p); for p = 2 in closed
+    form (the determinant over the largest where the trace is positive: no cancellation),
+    a tenth of the time of LAPACK's on the small batches of the search."""
+    if H.shape[-1] != 2:
+        return np.linalg.eigvalsh(0.5 * (H + np.swapaxes(H, -1, -2)))[..., 0]
+    a, d, b = H[..., 0, 0], H[..., 1, 1], 0.5 * (H[..., 0, 1] + H[..., 1, 0])
+    middle = 0.5 * (a + d)
+    radius = np.hypot(0.5 * (a - d), b)
+    positive = middle > 0
+    return np.where(positive, (a * d - b * b) / np.where(positive, middle + radius, 1.0), middle - radius)
+
+
+def _solve(H: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """H^-1 b for each positive definite H (n, p, p) and b (n, p); for p = 2 by the
+    adjugate (the numpy call's overhead is most of the time on the search's small batches)."""
+    if H.shape[-1] != 2:
+        return np.linalg.solve(H, b[..., None])[..., 0]
+    a, c, d = H[:, 0, 0], H[:, 0, 1], H[:, 1, 1]
+    determinant = a * d - c * H[:, 1, 0]
+    return np.stack([d * b[:, 0] - c * b[:, 1], a * b[:, 1] - H[:, 1, 0] * b[:, 0]], 1) / determinant[:, None]
 
 
 def _definite(H: np.ndarray) -> np.ndarray:
@@ -1643,7 +1664,19 @@ def _split_matrices(size: int) -> np.ndarray:
     return M
 
 
-_SPLITS = [_split_matrices(size) for size in SHAPE]
+def _children_matrix() -> np.ndarray:
+    """(2^p prod(SHAPE), prod(SHAPE)): the flattened Bernstein coefficients of a box's 2^p
+    halves (child c, a row of _CHILDREN, first) from the box's, the splits of every axis
+    in one product."""
+    K = np.ones(())
+    for size in SHAPE:
+        K = np.multiply.outer(K, _split_matrices(size))  # axes: side, child's, box's (per axis)
+    p = len(SHAPE)
+    K = K.transpose([3 * a for a in range(p)] + [3 * a + 1 for a in range(p)] + [3 * a + 2 for a in range(p)])
+    return K.reshape(2**p * math.prod(SHAPE), math.prod(SHAPE))
+
+
+_SPLIT_ALL = _children_matrix()
 _CHILDREN = np.array(np.unravel_index(np.arange(2 ** len(SHAPE)), (2,) * len(SHAPE))).T  # halves' sides
 _CORNERS = np.ravel_multi_index(tuple((_CHILDREN * (np.array(SHAPE) - 1)).T), SHAPE)
 
@@ -1660,13 +1693,11 @@ _DIFFERENCES, _DIFFERENCE_STARTS = _difference_rows()
 
 
 def _children(B: np.ndarray) -> np.ndarray:
-    """The Bernstein coefficients (2^p boxes, *SHAPE) of the 2^p halves of each box (boxes,
-    *SHAPE): halved along every axis, child c (a row of _CHILDREN: lower 0 or upper 1 along
-    each axis) of box b at c's place times the boxes plus b."""
-    for axis, M in enumerate(_SPLITS):  # B: (2,) * axis, boxes, *SHAPE
-        B = np.tensordot(M, B, axes=([2], [2 * axis + 1]))
-        B = np.moveaxis(B, [0, 1], [axis, 2 * axis + 2])
-    return B.reshape((-1,) + SHAPE)
+    """The flattened Bernstein coefficients (2^p boxes, prod(SHAPE)) of the 2^p halves of
+    each box (boxes, prod(SHAPE)): halved along every axis, child c (a row of _CHILDREN:
+    lower 0 or upper 1 along each axis) of box b at c's place times the boxes plus b."""
+    halves = (B @ _SPLIT_ALL.T).reshape(B.shape[0], _CHILDREN.shape[0], B.shape[1])
+    return halves.transpose(1, 0, 2).reshape(-1, B.shape[1])
 
 
 def _free_hessian(x: np.ndarray, gradient: np.ndarray, H: np.ndarray, strict: bool = True):
@@ -1677,6 +1708,8 @@ def _free_hessian(x: np.ndarray, gradient: np.ndarray, H: np.ndarray, strict: bo
     else:
         held = ((x <= 0.0) & (gradient >= 0)) | ((x >= 1.0) & (gradient <= 0))
     free = ~held
+    if not held.any():
+        return free, H
     H = np.where(free[:, :, None] & free[:, None, :], H, 0.0) + np.eye(x.shape[1]) * held[:, None, :]
     return free, H
 
@@ -1688,7 +1721,7 @@ def _descend(U: np.ndarray, x: np.ndarray, iterations: int = 80) -> tuple[np.nda
     lowers J by more than the rounding of its value, until no step does; then Newton on
     the gradient polishes what values cannot resolve. Returns the distinct points reached and whether each is a local minimum (the
     free Hessian positive definite, the projected gradient within rounding). J and its
-    derivatives come from `_jets` and `_values`, one product for all the starts."""
+    derivatives come from `_jets` and `_monomials`, one product for all the starts."""
     x = np.clip(x, 0.0, 1.0)
     sizes = np.abs(U)
     active = np.arange(x.shape[0])
@@ -1700,10 +1733,11 @@ def _descend(U: np.ndarray, x: np.ndarray, iterations: int = 80) -> tuple[np.nda
         scale = np.abs(H).max((1, 2))
         shift = np.maximum(1e-9 * scale - lowest, 0.0) + (scale == 0)  # J flat here: I
         H = H + shift[:, None, None] * np.eye(x.shape[1])
-        step = -np.linalg.solve(H, np.where(free, gradient, 0.0)[..., None])[..., 0]
+        step = -_solve(H, np.where(free, gradient, 0.0))
         trials = np.clip(here[:, None] + _TRIALS[None, :, None] * step[:, None], 0.0, 1.0)
-        values = _values(U, trials)  # the first: here (step 0)
-        rounding = ROUNDING * _values(sizes, here[:, None])  # of J's value here
+        terms = _monomials(trials)
+        values = terms @ U  # the first: here (step 0)
+        rounding = ROUNDING * (terms[:, :1] @ sizes)  # of J's value here
         better = values[:, 1:] < values[:, :1] - rounding
         found = better.any(1)
         chosen = trials[np.arange(here.shape[0]), 1 + np.argmax(better, 1)]
@@ -1723,7 +1757,7 @@ def _descend(U: np.ndarray, x: np.ndarray, iterations: int = 80) -> tuple[np.nda
         slope = np.where(free, gradient, 0.0)
         minimum = _definite(H) & (np.abs(slope) <= 1e-6 * np.maximum(size, EPS)).all(1)
         safe = np.where(minimum[:, None, None], H, np.eye(x.shape[1]))
-        step = -np.linalg.solve(safe, slope[..., None])[..., 0]
+        step = -_solve(safe, slope)
         polished = np.clip(x + np.where(minimum[:, None], step, 0.0), 0.0, 1.0)
         after = _jets(U, polished)[1]
         keep = np.abs(np.where(free, after, 0.0)).max(1) < np.abs(slope).max(1)
@@ -1751,21 +1785,29 @@ def _basins(U: np.ndarray, points: np.ndarray) -> np.ndarray:
     return boxes
 
 
-def _grid_minima(U: np.ndarray, p: int) -> np.ndarray:
+_GRID_SIDE = max(3, int(GRID_POINTS ** (1 / len(SHAPE))))
+_GRID_LINE = (np.arange(_GRID_SIDE) + 0.5) / _GRID_SIDE
+_GRID = np.stack(np.meshgrid(*[_GRID_LINE] * len(SHAPE), indexing="ij"), -1).reshape(-1, len(SHAPE))
+_GRID_POWERS = [_GRID_LINE[:, None] ** np.arange(size) for size in SHAPE]
+
+
+def _grid_minima(U: np.ndarray) -> np.ndarray:
     """The starts of the descents: the points of a grid over the box (about GRID_POINTS)
     no higher than any neighbour, the lowest GRID_STARTS of them. Each local minimum wide
     enough for the grid to see is near one, so the descents are short."""
-    side = max(3, int(GRID_POINTS ** (1 / p)))
-    grid = (np.arange(side) + 0.5) / side
-    x = np.stack(np.meshgrid(*[grid] * p, indexing="ij"), -1).reshape(-1, p)
-    values = _values(U, x[None])[0]
-    lowest = values.reshape((side,) * p)
-    for axis in range(p):  # the least over each point's 3^p neighbourhood, axis by axis
-        padded = np.moveaxis(np.pad(lowest, [(1, 1) if a == axis else (0, 0) for a in range(p)],
-                                    mode="edge"), axis, 0)  # fmt: skip
-        lowest = np.moveaxis(np.minimum(np.minimum(padded[:-2], padded[1:-1]), padded[2:]), 0, axis)
+    values = U.reshape(SHAPE)
+    for powers in _GRID_POWERS:  # J on the grid, one axis at a time (it goes last)
+        values = np.tensordot(values, powers, axes=([0], [1]))
+    lowest = values
+    for axis in range(len(SHAPE)):  # the least over each point's 3^p neighbourhood, axis by axis
+        along = np.moveaxis(lowest, axis, 0)
+        least = along.copy()
+        np.minimum(least[1:], along[:-1], out=least[1:])
+        np.minimum(least[:-1], along[1:], out=least[:-1])
+        lowest = np.moveaxis(least, 0, axis)
+    values = values.ravel()
     where = np.flatnonzero(values <= lowest.ravel())
-    return x[where[np.argsort(values[where], kind="stable")[:GRID_STARTS]]]
+    return _GRID[where[np.argsort(values[where], kind="stable")[:GRID_STARTS]]]
 
 
 def _search(T: np.ndarray, centre, box: np.ndarray, starts=()) -> _Minima:
@@ -1777,7 +1819,7 @@ def _search(T: np.ndarray, centre, box: np.ndarray, starts=()) -> _Minima:
     U = _on_box(T, lo - centre, width)
     B = _bernstein(U.reshape(SHAPE))
     tolerance = SEARCH_TOLERANCE * max(float(np.abs(B).max()), np.finfo(float).tiny)
-    x = _grid_minima(U, p)
+    x = _grid_minima(U)
     extra = np.reshape(np.asarray(starts, dtype=float), (-1, p))
     x = np.concatenate([x, (extra - lo) / width])
     points, values = np.zeros((0, p)), np.zeros(0)
@@ -1824,7 +1866,7 @@ def _search(T: np.ndarray, centre, box: np.ndarray, starts=()) -> _Minima:
         if boxes.shape[0] > MAX_BOXES >> p:
             break
         side_length *= 0.5
-        boxes = _children(boxes.reshape((-1,) + SHAPE)).reshape(-1, boxes.shape[1])
+        boxes = _children(boxes)
         corners = (corners[None] + side_length * _CHILDREN[:, None]).reshape(-1, p)
     if not certified and boxes.shape[0]:  # what is left: look there too
         order = np.argsort(boxes.min(1))[:64]
