@@ -1496,7 +1496,8 @@ def _newton_several(P: np.ndarray, k, iterations: int = 12) -> tuple[np.ndarray,
 
 def _second_derivatives(A: np.ndarray) -> np.ndarray:
     """The flattened tensors (..., unknowns, unknowns, prod(SHAPE)) of d2J/dk_i dk_j, J the
-    flattened tensors A (zero-padded to SHAPE)."""
+    flattened tensors A (zero-padded to SHAPE); applied once, to the identity, for
+    _SECOND_DERIVATIVES."""
     lead = A.shape[:-1]
     T = A.reshape(lead + SHAPE)
 
@@ -1511,6 +1512,9 @@ def _second_derivatives(A: np.ndarray) -> np.ndarray:
                               -2) for i in range(len(SHAPE))], -3)  # fmt: skip
 
 
+_SECOND_DERIVATIVES = _second_derivatives(np.eye(math.prod(SHAPE))).reshape(math.prod(SHAPE), -1)  # A @ it
+
+
 def _normal_hessians(A: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """L^-1 H(centre + d) L^-T as flattened tensors in d (..., unknowns, unknowns,
     prod(SHAPE)), H J's Hessian and L L^T its value at the centre of the Taylor tensors A
@@ -1521,7 +1525,10 @@ def _normal_hessians(A: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     ok = _definite(H)
     L = np.linalg.cholesky(np.where(ok[..., None, None], H, np.eye(len(UNKNOWNS))))
     inverse = np.linalg.inv(L)
-    return np.einsum("...ki,...lj,...ijg->...klg", inverse, inverse, _second_derivatives(A)), ok
+    lead, p, size = A.shape[:-1], len(UNKNOWNS), A.shape[-1]
+    second = (A @ _SECOND_DERIVATIVES).reshape(lead + (p * p, size))
+    pairs = (inverse[..., :, None, :, None] * inverse[..., None, :, None, :]).reshape(lead + (p * p, p * p))
+    return (pairs @ second).reshape(lead + (p, p, size)), ok
 
 
 def _curvature_enclosure(normal: np.ndarray, lo: np.ndarray, width: np.ndarray) -> np.ndarray:
@@ -1531,7 +1538,7 @@ def _curvature_enclosure(normal: np.ndarray, lo: np.ndarray, width: np.ndarray) 
     Bernstein coefficients (see `_search`), the least eigenvalue of the interval matrix at
     least its middle's less the Frobenius norm of its radius."""
     U = _on_box(normal, lo[..., None, None, :], width[..., None, None, :])
-    flat = _bernstein(U.reshape(U.shape[:-1] + SHAPE)).reshape(U.shape)
+    flat = _bernstein(U)
     low, high = flat.min(-1), flat.max(-1)
     middle, radius = 0.5 * (low + high), 0.5 * (high - low)
     return _lowest_curvature(middle) - np.sqrt((radius**2).sum((-1, -2)))
@@ -1619,17 +1626,18 @@ class _Minima:
     certified: bool
 
 
-def _bernstein_matrix(size: int) -> np.ndarray:
-    """M with b = M a: power coefficients a on [0, 1] to Bernstein coefficients b."""
-    degree = size - 1
-    M = np.zeros((size, size))
-    for j in range(size):
-        for i in range(j + 1):
-            M[j, i] = math.comb(j, i) / math.comb(degree, i)
+def _bernstein_matrix() -> np.ndarray:
+    """M with b = M a: the flattened power tensor a on [0, 1]^p to its Bernstein
+    coefficients b (every axis' conversion at once)."""
+    M = np.ones((1, 1))
+    for size in SHAPE:
+        axis = [[math.comb(j, i) / math.comb(size - 1, i) if i <= j else 0.0 for i in range(size)]
+                for j in range(size)]  # fmt: skip
+        M = np.kron(M, axis)
     return M
 
 
-_BERNSTEIN = [_bernstein_matrix(size) for size in SHAPE]
+_BERNSTEIN = _bernstein_matrix()
 
 
 def _on_box(T: np.ndarray, lo: np.ndarray, width: np.ndarray) -> np.ndarray:
@@ -1646,12 +1654,8 @@ def _on_box(T: np.ndarray, lo: np.ndarray, width: np.ndarray) -> np.ndarray:
 
 
 def _bernstein(U: np.ndarray) -> np.ndarray:
-    """Bernstein coefficients on [0, 1]^p of the power tensors U (..., *SHAPE)."""
-    B = U
-    lead = U.ndim - len(SHAPE)
-    for axis, M in enumerate(_BERNSTEIN):
-        B = np.moveaxis(np.tensordot(B, M, axes=([lead + axis], [1])), -1, lead + axis)
-    return B
+    """Bernstein coefficients on [0, 1]^p of the flattened power tensors U (..., prod(SHAPE))."""
+    return U @ _BERNSTEIN.T
 
 
 def _split_matrices(size: int) -> np.ndarray:
@@ -1820,7 +1824,7 @@ def _search(T: np.ndarray, centre, box: np.ndarray, starts=()) -> _Minima:
     p = box.shape[0]
     lo, width = box[:, 0], box[:, 1] - box[:, 0]
     U = _on_box(T, lo - centre, width)
-    B = _bernstein(U.reshape(SHAPE))
+    B = _bernstein(U)
     tolerance = SEARCH_TOLERANCE * max(float(np.abs(B).max()), np.finfo(float).tiny)
     x = _grid_minima(U)
     extra = np.reshape(np.asarray(starts, dtype=float), (-1, p))
