@@ -1706,13 +1706,14 @@ def _children(B: np.ndarray) -> np.ndarray:
 def _free_hessian(x: np.ndarray, gradient: np.ndarray, H: np.ndarray, strict: bool = True):
     """The coordinates a bound does not hold at x (the gradient pushes it out of the box
     there), and the Hessian restricted to them (identity on the others)."""
+    low, high = x <= 0.0, x >= 1.0
+    if not (low.any() or high.any()):  # inside the box (most steps): nothing held
+        return np.ones(x.shape, dtype=bool), H
     if strict:
-        held = ((x <= 0.0) & (gradient > 0)) | ((x >= 1.0) & (gradient < 0))
+        held = (low & (gradient > 0)) | (high & (gradient < 0))
     else:
-        held = ((x <= 0.0) & (gradient >= 0)) | ((x >= 1.0) & (gradient <= 0))
+        held = (low & (gradient >= 0)) | (high & (gradient <= 0))
     free = ~held
-    if not held.any():
-        return free, H
     H = np.where(free[:, :, None] & free[:, None, :], H, 0.0) + np.eye(x.shape[1]) * held[:, None, :]
     return free, H
 
