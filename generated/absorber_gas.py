@@ -1393,48 +1393,58 @@ def _evaluate(T: np.ndarray, x: np.ndarray) -> np.ndarray:
 
 
 _EXPONENTS_FLAT = np.array(np.unravel_index(np.arange(math.prod(SHAPE)), SHAPE))  # (p, prod(SHAPE))
-_AXES = np.arange(len(SHAPE))[:, None]
 
 
 def _jet_layout() -> tuple[np.ndarray, np.ndarray]:
-    """Where each term of the flattened tensor's value, gradient and Hessian (1 + p + p^2
-    rows: 1, d/dk_i, d2/dk_i dk_j) takes its power of each coordinate (index into a table
-    x^(j - 1), slot 0 zero: a derivative of a lower power vanishes), and its factor (the
-    falling factorials of the exponents)."""
+    """Where the coefficients of J's value, gradient and Hessian (1 + p + p^2 rows: 1, d/dk_i,
+    d2/dk_i dk_j) come from in J's flattened tensor, and their factors: at exponents e, the
+    derivative of orders o takes J's coefficient of k^(e + o) times the falling factorials
+    of e + o (0 where e + o is beyond SHAPE)."""
     p = len(SHAPE)
     orders = np.concatenate([np.zeros((1, p), dtype=int), _UNIT, (_UNIT[:, None] + _UNIT).reshape(-1, p)])
-    lowered = _EXPONENTS_FLAT[None] - orders[:, :, None]  # (rows, p, prod(SHAPE))
-    factors = np.ones(lowered.shape)
+    raised = _EXPONENTS_FLAT.T[None] + orders[:, None]  # (rows, prod(SHAPE), p)
+    inside = (raised < np.array(SHAPE)).all(-1)
+    factors = np.ones(raised.shape)
     for order in (1, 2):
-        factors *= np.where(orders[:, :, None] >= order, _EXPONENTS_FLAT[None] - order + 1, 1)
-    return np.maximum(lowered + 1, 0), np.where(lowered >= 0, factors, 0.0).prod(1)
+        factors *= np.where(orders[:, None] >= order, raised - order + 1, 1)
+    places = np.ravel_multi_index(tuple(np.minimum(raised, np.array(SHAPE) - 1).T), SHAPE).T
+    return places, np.where(inside, factors.prod(-1), 0.0)
 
 
 _JET_PLACES, _JET_FACTORS = _jet_layout()
 
 
+def _jet_columns(T: np.ndarray) -> np.ndarray:
+    """(prod(SHAPE), 1 + p + p^2): `_monomials(x) @` it are the value, the gradient and the
+    Hessian (flattened) at x of the flattened tensor T: one product for them all, at any
+    number of points."""
+    return (T[_JET_PLACES] * _JET_FACTORS).T
+
+
 def _power_table(x: np.ndarray) -> np.ndarray:
-    """(..., p, max(SHAPE) + 1): 0 then x_i^j, j = 0..max(SHAPE) - 1, for each coordinate."""
-    out = np.zeros(x.shape + (max(SHAPE) + 1,))
-    out[..., 1] = 1.0
-    for j in range(2, out.shape[-1]):
+    """(..., p, max(SHAPE)): x_i^j, j = 0..max(SHAPE) - 1, for each coordinate."""
+    out = np.empty(x.shape + (max(SHAPE),))
+    out[..., 0] = 1.0
+    for j in range(1, out.shape[-1]):
         np.multiply(out[..., j - 1], x, out=out[..., j])
     return out
 
 
 def _monomials(x: np.ndarray) -> np.ndarray:
     """The terms of a flattened tensor at the points x (..., p): (..., prod(SHAPE)), so that
-    `_monomials(x) @ T` is T there."""
-    return _power_table(x)[..., _AXES, _EXPONENTS_FLAT + 1].prod(-2)
+    `_monomials(x) @ T` is T there (the outer product of each coordinate's powers)."""
+    table = _power_table(x)
+    terms = table[..., 0, : SHAPE[0]]
+    for axis in range(1, len(SHAPE)):
+        terms = (terms[..., :, None] * table[..., axis, None, : SHAPE[axis]]).reshape(x.shape[:-1] + (-1,))
+    return terms
 
 
-def _jets(T: np.ndarray, x: np.ndarray):
-    """Value (n,), gradient (n, p) and Hessian (n, p, p) of one flattened tensor T at the
-    points x (n, p): each derivative's terms at the points, weighted by T, one product for
-    all the points (what `_local_form` of `_shift` gives, without the whole Taylor tensor)."""
+def _jets(C: np.ndarray, x: np.ndarray):
+    """Value (n,), gradient (n, p) and Hessian (n, p, p) at the points x (n, p) of the
+    tensor whose `_jet_columns` are C."""
     p = x.shape[1]
-    terms = _power_table(x)[:, _AXES, _JET_PLACES].prod(-2)  # (n, rows, prod(SHAPE))
-    jets = np.einsum("nrt,rt->nr", terms, _JET_FACTORS * T)
+    jets = _monomials(x) @ C
     return jets[:, 0], jets[:, 1 : 1 + p], jets[:, 1 + p :].reshape(-1, p, p)
 
 
@@ -1722,35 +1732,62 @@ def _free_hessian(x: np.ndarray, gradient: np.ndarray, H: np.ndarray, strict: bo
     return free, H
 
 
+def _descent_steps(x: np.ndarray, gradient: np.ndarray, H: np.ndarray) -> np.ndarray:
+    """The descents' Newton steps at x: -(H + shift I)^-1 g on the coordinates a bound does
+    not hold (`_free_hessian`), H shifted where it is not positive definite (its smallest
+    eigenvalue raised to 1e-9 of its largest entry; I where J is flat). For p = 2 in closed
+    form on H's entries (the arithmetic of `_lowest_curvature` and `_solve`), in a third of
+    the numpy calls."""
+    free, H = _free_hessian(x, gradient, H)
+    if not free.all():
+        gradient = np.where(free, gradient, 0.0)
+    scale = np.abs(H).max((1, 2))
+    if x.shape[1] != 2:
+        shift = np.maximum(1e-9 * scale - _lowest_curvature(H), 0.0) + (scale == 0)
+        return -_solve(H + shift[:, None, None] * np.eye(x.shape[1]), gradient)
+    a, b, d = H[:, 0, 0], H[:, 0, 1], H[:, 1, 1]
+    middle = 0.5 * (a + d)
+    radius = np.hypot(0.5 * (a - d), b)
+    positive = middle > 0
+    lowest = np.where(positive, (a * d - b * b) / np.where(positive, middle + radius, 1.0), middle - radius)
+    shift = np.maximum(1e-9 * scale - lowest, 0.0) + (scale == 0)
+    a, d = a + shift, d + shift
+    g, h = gradient[:, 0], gradient[:, 1]
+    return np.stack([d * g - b * h, a * h - b * g], 1) / -(a * d - b * b)[:, None]
+
+
 def _descend(U: np.ndarray, x: np.ndarray, iterations: int = 80) -> tuple[np.ndarray, np.ndarray]:
     """Local minima of the polynomial U (flattened tensor, box coordinates) on [0, 1]^p from
     the starts x (starts, unknowns): Newton steps on the coordinates not held by a bound
     (the Hessian shifted where it is not positive definite), the longest of _STEPS that
     lowers J by more than the rounding of its value, until no step does; then Newton on
-    the gradient polishes what values cannot resolve. Returns the distinct points reached and whether each is a local minimum (the
-    free Hessian positive definite, the projected gradient within rounding). J and its
-    derivatives come from `_jets` and `_monomials`, one product for all the starts."""
+    the gradient polishes what values cannot resolve. Returns the distinct points reached
+    and whether each is a local minimum (the free Hessian positive definite, the projected
+    gradient within rounding). J's value, gradient and Hessian, and the sizes of the terms
+    of J and of its gradient (their rounding), are one product of the points' monomials
+    with `_jet_columns`, for every start and trial step at once; the trial taken gives the
+    next step's."""
     x = np.clip(x, 0.0, 1.0)
-    sizes = np.abs(U)
+    p = x.shape[1]
+    hessian, size = 1 + p + p * p, 2 + p + p * p  # columns: J, gradient, Hessian, |J|, its gradient
+    columns = np.concatenate([_jet_columns(U), _jet_columns(np.abs(U))[:, : 1 + p]], 1)
+    jets = _monomials(x) @ columns
     active = np.arange(x.shape[0])
     for _ in range(iterations):
         here = x[active]
-        _, gradient, H = _jets(U, here)
-        free, H = _free_hessian(here, gradient, H)
-        lowest = _lowest_curvature(H)
-        scale = np.abs(H).max((1, 2))
-        shift = np.maximum(1e-9 * scale - lowest, 0.0) + (scale == 0)  # J flat here: I
-        H = H + shift[:, None, None] * np.eye(x.shape[1])
-        step = -_solve(H, np.where(free, gradient, 0.0))
-        trials = np.clip(here[:, None] + _TRIALS[None, :, None] * step[:, None], 0.0, 1.0)
-        terms = _monomials(trials)
-        values = terms @ U  # the first: here (step 0)
-        rounding = ROUNDING * (terms[:, :1] @ sizes)  # of J's value here
-        better = values[:, 1:] < values[:, :1] - rounding
+        gradient, H = jets[:, 1 : 1 + p], jets[:, 1 + p : hessian].reshape(-1, p, p)
+        step = _descent_steps(here, gradient, H)
+        trials = np.minimum(np.maximum(here[:, None] + _TRIALS[None, :, None] * step[:, None], 0.0), 1.0)
+        at = _monomials(trials) @ columns  # the first: here (step 0)
+        values = at[..., 0]
+        better = values[:, 1:] < values[:, :1] - ROUNDING * at[:, :1, hessian]
         found = better.any(1)
-        chosen = trials[np.arange(here.shape[0]), 1 + np.argmax(better, 1)]
+        taken = 1 + np.argmax(better, 1)
+        rows = np.arange(here.shape[0])
+        chosen = trials[rows, taken]
         moved = found & (np.abs(chosen - here).max(1) > 4 * EPS)
         x[active[found]] = chosen[found]
+        jets = at[rows[moved], taken[moved]]
         active = active[moved]
         if active.size == 0:
             break
@@ -1758,18 +1795,19 @@ def _descend(U: np.ndarray, x: np.ndarray, iterations: int = 80) -> tuple[np.nda
     x = x[order]
     x = x[np.r_[True, np.abs(np.diff(x, axis=0)).max(1) > 1e-6]]  # starts that met
     minimum = np.zeros(x.shape[0], dtype=bool)
+    jets = _monomials(x) @ columns
     for _ in range(3):  # polish: values no longer tell, the gradient still does
-        _, gradient, H = _jets(U, x)
-        size = _jets(sizes, x)[1]
+        gradient, H = jets[:, 1 : 1 + p], jets[:, 1 + p : hessian].reshape(-1, p, p)
         free, H = _free_hessian(x, gradient, H, strict=False)
         slope = np.where(free, gradient, 0.0)
-        minimum = _definite(H) & (np.abs(slope) <= 1e-6 * np.maximum(size, EPS)).all(1)
-        safe = np.where(minimum[:, None, None], H, np.eye(x.shape[1]))
+        minimum = _definite(H) & (np.abs(slope) <= 1e-6 * np.maximum(jets[:, size:], EPS)).all(1)
+        safe = np.where(minimum[:, None, None], H, np.eye(p))
         step = -_solve(safe, slope)
         polished = np.clip(x + np.where(minimum[:, None], step, 0.0), 0.0, 1.0)
-        after = _jets(U, polished)[1]
-        keep = np.abs(np.where(free, after, 0.0)).max(1) < np.abs(slope).max(1)
+        after = _monomials(polished) @ columns
+        keep = np.abs(np.where(free, after[:, 1 : 1 + p], 0.0)).max(1) < np.abs(slope).max(1)
         x = np.where(keep[:, None], polished, x)
+        jets = np.where(keep[:, None], after, jets)
     return x, minimum
 
 
