@@ -498,15 +498,17 @@ def _response_rows(A, B, t, W, holds, start=None, steps=None) -> np.ndarray | No
     return rows if V is None else V @ rows
 
 
-def _schur_rows(A, B, t, W, holds, start=None, steps=None, out=None):
+def _schur_rows(A, B, t, W, holds, start=None, steps=None, out=None, H=None):
     """(V, V^-1, rows): the states of x' = A x + B w for each row w of W (interpolated per
     its hold), from rest (or `start`), at regular sampling, as rows (len(W), order, len(t))
     in A's balanced real Schur coordinates z = V^-1 x (`_schur_coordinates`; V None: A's
     own), all the signals by one set of scalar recursions (`_triangular`): no companion
     matrix is exponentiated, and the poles near z = 1 at fine sampling stay on the
     diagonal. rows is a view of `out` (len(W), order + 2, len(t)) if given, the samples of
-    W and the next ones below the states (`_triangular`'s layout). None where it does not
-    apply (irregular sampling, or an ill-conditioned complex pair)."""
+    W and the next ones below the states (`_triangular`'s layout). Given the output rows H
+    (outputs, order; in A's coordinates), rows are the outputs H x alone (len(W), outputs,
+    len(t)), the states never stored. None where it does not apply (irregular sampling, or
+    an ill-conditioned complex pair)."""
     steps = _Steps.of(t) if steps is None and t.size > 1 else steps
     if steps is None or steps.index is not None or not A.shape[0] or not np.isfinite(A).all():
         return None
@@ -518,6 +520,12 @@ def _schur_rows(A, B, t, W, holds, start=None, steps=None, out=None):
     z0 = inverse @ (np.zeros(order) if start is None else start)
     maps = {hold: _transitions(F, g, steps.values, hold) for hold in set(holds)}
     Gamma = np.stack([maps[hold][1][0] for hold in holds])  # (signals, [w_i, w_(i+1)], order)
+    if H is not None:
+        out = np.empty((W.shape[0], H.shape[0], t.size))
+        Hz = H if V is None else H @ V
+        if not _triangular(maps[holds[0]][0][0], Gamma, z0, blocks, out, Hz, W):
+            return None
+        return V, inverse, out
     out = np.empty((W.shape[0], order + 2, t.size)) if out is None else out
     out[:, order] = W
     out[:, order + 1, :-1], out[:, order + 1, -1] = W[:, 1:], W[:, -1]
@@ -3243,11 +3251,21 @@ def _state_rows(F, g, t, u, hold: str, start=None, steps=None) -> np.ndarray:
     return rows[0] if rows is not None else _responses(F, g, t, u, (hold,), start=start)[0].T
 
 
+def _output_rows(F, g, H, t, u, hold: str, steps=None) -> np.ndarray:
+    """H z (outputs, samples), a row per row of H, along z' = F z + g u from rest: at
+    regular sampling straight from the blocked recursion (`_schur_rows` with H), without
+    storing the states."""
+    found = _schur_rows(F, g, t, u[None], (hold,), steps=steps, H=H)
+    if found is not None:
+        return found[2][0]
+    return H @ _responses(F, g, t, u, (hold,))[0].T
+
+
 def _forced(real: _Realisation, t, u, hold: str, steps=None) -> np.ndarray:
     """The output from rest at the samples (exact for the hold)."""
     if real.order == 0:
         return real.d * u
-    return real.h @ _state_rows(real.F, real.g, t, u, hold, steps=steps) + real.d * u
+    return _output_rows(real.F, real.g, real.h[None], t, u, hold, steps)[0] + real.d * u
 
 
 def _free(real: _Realisation, t: np.ndarray, steps: "_Steps") -> np.ndarray:
@@ -3330,6 +3348,29 @@ def _augmented(real: _Realisation, t, u, hold: str, z0, steps=None) -> tuple[np.
     return rows[count * order :], rows[: count * order].reshape(count, order, t.size)
 
 
+def _augmented_outputs(real: _Realisation, t, u, hold: str, steps=None) -> tuple[np.ndarray, np.ndarray]:
+    """(forced, slopes): the output from rest (samples) and its derivatives with respect to
+    the unknowns (unknowns, samples), from the augmented system's output rows
+    (`_augmented_rows`) alone."""
+    count, order = len(real.dd), real.order
+    g = np.zeros(order * (1 + count))
+    g[count * order :] = real.g
+    rows = _output_rows(_augmented_matrix(real), g, _augmented_rows(real), t, u, hold, steps)
+    return rows[0] + real.d * u, rows[1:] + np.outer(real.dd, u)
+
+
+def _augmented_rows(real: _Realisation) -> np.ndarray:
+    """The augmented system's output rows: [0, .., 0, h] (the output) and, per unknown i,
+    [0, .., h, .., 0, dh_i] (h in the i-th place: the output's derivative, less dd_i u)."""
+    count, order = len(real.dd), real.order
+    H = np.zeros((1 + count, order * (count + 1)))
+    H[0, count * order :] = real.h
+    for j in range(count):
+        H[1 + j, j * order : (j + 1) * order] = real.h
+    H[1:, count * order :] = real.dh
+    return H
+
+
 def _augmented_matrix(real: _Realisation) -> np.ndarray:
     """The augmented system's matrix, [[F, .., 0, dF_1], .., [0, .., F, dF_p], [0, .., 0, F]]
     for the state [dz/dk_1; ..; dz/dk_p; z]: upper quasi-triangular as F is."""
@@ -3341,28 +3382,26 @@ def _augmented_matrix(real: _Realisation) -> np.ndarray:
     return F
 
 
-def _free_responses(real: _Realisation, t, steps: "_Steps", slopes: bool):
+def _free_responses(real: _Realisation, t, steps: "_Steps", slopes: bool, out=None):
     """(rows, along): the free responses h Phi(t_i - t_0) e_j at the samples, a row per
-    state j (order, samples), and (`slopes`; else None) the function of z0 that gives the
-    derivatives of z0's free response with respect to the unknowns with z0 held (unknowns,
-    samples): the augmented system's output rows [0, .., h, .., 0, dh_i] (h in the i-th
-    place) along its free response from [0; z0], whose last block is the free response
-    itself (row [0, .., 0, h]): one matrix exponential and one set of powers for both."""
-    count, order = len(real.dd), real.order
-    F, H = real.F, real.h[None]
-    if slopes:
-        F = _augmented_matrix(real)
-        H = np.zeros((1 + count, order * (count + 1)))
-        H[0, count * order :] = real.h
-        for j in range(count):
-            H[1 + j, j * order : (j + 1) * order] = real.h
-        H[1:, count * order :] = real.dh
+    state j (order, samples; written into `out` if given), and (`slopes`; else None) the
+    function of z0 that gives the derivatives of z0's free response with respect to the
+    unknowns with z0 held (unknowns, samples): the augmented system's output rows
+    [0, .., h, .., 0, dh_i] (h in the i-th place) along its free response from [0; z0],
+    whose last block is the free response itself (row [0, .., 0, h]): one matrix
+    exponential and one set of powers for both."""
+    order = real.order
+    F, H = (_augmented_matrix(real), _augmented_rows(real)) if slopes else (real.F, real.h[None])
     size = F.shape[0]
     if steps.index is not None:
         found = _free_rows(F, H, t, steps, order).transpose(2, 0, 1)  # (state, row, sample)
-        return found[:, 0], (lambda z0: np.tensordot(z0, found[:, 1:], 1)) if slopes else None
+        rows = found[:, 0] if out is None else out
+        if out is not None:
+            out[...] = found[:, 0]
+        return rows, (lambda z0: np.tensordot(z0, found[:, 1:], 1)) if slopes else None
     maps = _orbit_maps(linalg.expm(F * steps.values[0]), t.size)
-    rows = _orbits(maps, H[:1], np.eye(size)[:, size - order :], t.size)[:, 0]
+    rows = _orbits(maps, H[:1], np.eye(size)[:, size - order :], t.size,
+                   None if out is None else out[:, None])[:, 0]  # fmt: skip
 
     def along(z0: np.ndarray) -> np.ndarray:
         start = np.zeros((size, 1))
@@ -3380,18 +3419,18 @@ def _orbit_maps(Phi: np.ndarray, count: int) -> tuple:
     return length, powers, _powers(powers[length], -(-count // length))
 
 
-def _orbits(maps: tuple, H: np.ndarray, starts: np.ndarray, count: int) -> np.ndarray:
-    """H Phi^i s for i = 0 .. count - 1 and each column s of starts, (columns, rows, count),
-    from `_orbit_maps`: by blocks of L samples, H Phi^j (Phi^L)^q s at sample qL + j, the
-    block starts vectors (below TINY: 0), each orbit's row one product with the stacked
-    H Phi^j, written in place."""
+def _orbits(maps: tuple, H: np.ndarray, starts: np.ndarray, count: int, out=None) -> np.ndarray:
+    """H Phi^i s for i = 0 .. count - 1 and each column s of starts, (columns, rows, count)
+    (written into `out` if given, each row contiguous), from `_orbit_maps`: by blocks of L
+    samples, H Phi^j (Phi^L)^q s at sample qL + j, the block starts vectors (below TINY:
+    0), each orbit's row one product with the stacked H Phi^j, written in place."""
     length, powers, blocks = maps
     columns, rows = starts.shape[1], H.shape[0]
     begins = blocks @ starts  # (blocks, size, columns)
     begins[np.abs(begins) < TINY] = 0.0
     ends = (H @ powers[:length]).transpose(1, 2, 0).copy()  # (rows, size, L)
     begins = begins.transpose(2, 0, 1).copy()  # (columns, blocks, size)
-    out = np.empty((columns, rows, count))
+    out = np.empty((columns, rows, count)) if out is None else out
     full, rest = divmod(count, length)
     for c in range(columns):
         for r in range(rows):
@@ -3403,12 +3442,7 @@ def _orbits(maps: tuple, H: np.ndarray, starts: np.ndarray, count: int) -> np.nd
 
 def _output_slopes(real: _Realisation, z, dz, u) -> np.ndarray:
     """d/dk of y = h z + d u (samples, unknowns), from the states z and their derivatives."""
-    return _output_slope_rows(real, z, dz, u).T
-
-
-def _output_slope_rows(real: _Realisation, z, dz, u) -> np.ndarray:
-    """`_output_slopes` as rows (unknowns, samples)."""
-    return real.h @ dz + real.dh @ z + np.outer(real.dd, u)
+    return (real.h @ dz + real.dh @ z + np.outer(real.dd, u)).T
 
 
 def _with_nuisances(t, u, y, k, *, hold: str, offset: bool, initial_state: bool, known: dict):
@@ -3540,23 +3574,29 @@ def _block_starts(Phi_m: np.ndarray, drives: np.ndarray, z0, blocks, modes, m: i
             x[:, start:end, lo + 1 : hi + 1] = 2.0 * (vector * xi[:, None, :]).real
 
 
-def _triangular(Phi: np.ndarray, Gamma: np.ndarray, z0: np.ndarray, blocks, out: np.ndarray) -> bool:
+def _triangular(Phi: np.ndarray, Gamma: np.ndarray, z0: np.ndarray, blocks, out: np.ndarray,
+                H: np.ndarray | None = None, samples: np.ndarray | None = None) -> bool:  # fmt: skip
     """States z_0..z_N of z_(i+1) = Phi z_i + Gamma[j]^T [w_i, w_(i+1)] for each signal j
     (Gamma (signals, 2, order)) from z0, Phi upper quasi-triangular with the diagonal
     `blocks`, written into the first `order` rows of out (signals, order + 2, N + 1), whose
     row `order` holds each signal's samples w_0..w_N (the next row, w_1..w_N with the last
-    repeated, is left as it is); False (out undefined) when a 2 x 2 block is not a
-    well-conditioned complex pair (the general `_propagate` then). In blocks of
-    TRIANGULAR_BLOCK samples (see above): per signal, one product for the blocks' drives,
-    one scalar recursion per diagonal block over the N/m blocks (`_block_starts`), and one
-    product [x_b, W_b] [Phi^l; K_l] for all the states within them."""
+    repeated, is left as it is); or, given the rows H (outputs, order), only the outputs
+    H z_i, written into out (signals, outputs, N + 1), the samples then given apart
+    (signals, N + 1): the product within the blocks runs with H [Phi^l; K_l], a row per
+    output where there were `order`, and the states are never stored. False (out undefined)
+    when a 2 x 2 block is not a well-conditioned complex pair (the general `_propagate`
+    then). In blocks of TRIANGULAR_BLOCK samples (see above): per signal, one product for
+    the blocks' drives, one scalar recursion per diagonal block over the N/m blocks
+    (`_block_starts`), and one product [x_b, W_b] [Phi^l; K_l] for all the states within
+    them."""
     if not np.isfinite(Phi).all():
         return False
     modes = {start: _pair_mode(Phi[start : start + 2, start : start + 2]) for start, size in blocks if size == 2}
     if any(mode is None for mode in modes.values()):
         return False
     order, count, steps = Phi.shape[0], Gamma.shape[0], out.shape[2] - 1
-    out[:, :order, 0] = z0
+    rows = order if H is None else H.shape[0]
+    out[:, :rows, 0] = z0 if H is None else H @ z0
     if steps == 0:
         return True
     m = TRIANGULAR_BLOCK if steps >= BLOCKED_FROM * TRIANGULAR_BLOCK else 1  # (m = 1: the
@@ -3564,25 +3604,29 @@ def _triangular(Phi: np.ndarray, Gamma: np.ndarray, z0: np.ndarray, blocks, out:
     powers, K = _step_maps(Phi, Gamma, m)
     full, B = steps // m, -(-steps // m)  # blocks of m steps, and with the shorter last one
     V = np.zeros((count, B, order + m + 1))  # per block: [x_b, its m + 1 samples (then 0)]
-    samples = out[:, order]
+    samples = out[:, order] if samples is None else samples
     V[:, :full, order:-1] = samples[:, : full * m].reshape(count, full, m)
     V[:, :full, -1] = samples[:, m : full * m + 1 : m]
     if full < B:
         V[:, full, order : order + steps + 1 - full * m] = samples[:, full * m :]
-    x = out[:, :order] if m == 1 else np.empty((count, order, B + 1))
+    x = out[:, :order] if m == 1 and H is None else np.empty((count, order, B + 1))
     _block_starts(powers[m], np.swapaxes(V[:, :, order:] @ K[:, m], 1, 2), z0, blocks, modes, m, x)
     if m == 1:
+        if H is not None:
+            np.matmul(H, x, out=out[:, :rows])
         return True
     V[:, :, :order] = np.swapaxes(x[:, :, :B], 1, 2)
     maps = np.empty((count, order, order + m + 1, m))  # state i at step l from [x_b, W_b]
     maps[:, :, :order] = powers[:m].transpose(1, 2, 0)
     maps[:, :, order:] = K[:, :m].transpose(0, 3, 2, 1)
-    np.matmul(V[:, None, :full], maps, out=out[:, :order, : full * m].reshape(count, order, full, m))
+    if H is not None:  # output r at step l from [x_b, W_b]
+        maps = np.matmul(H, maps.reshape(count, order, -1)).reshape(count, rows, order + m + 1, m)
+    np.matmul(V[:, None, :full], maps, out=out[:, :rows, : full * m].reshape(count, rows, full, m))
     if full < B:
-        last = V[:, None, full:] @ maps  # (signals, order, 1, m)
-        out[:, :order, full * m :] = last[:, :, 0, : steps + 1 - full * m]
+        last = V[:, None, full:] @ maps  # (signals, rows, 1, m)
+        out[:, :rows, full * m :] = last[:, :, 0, : steps + 1 - full * m]
     else:
-        out[:, :order, steps] = x[:, :, B]
+        out[:, :rows, steps] = x[:, :, B] if H is None else x[:, :, B] @ H.T
     return True
 
 
@@ -3951,6 +3995,8 @@ RESIDUAL_ROUNDING = 1e-10  # residuals below this share of the output's spread (
 DAMPING = 1e-4  # the first Levenberg-Marquardt damping, relative to J^T J's diagonal
 GRAM_CONDITION = 1e8  # the nuisances' scaled Gram matrix factorised directly below this
 SAME_BASIN = 3.0  # a descent this many standard errors from a minimum found ends there
+SYRK_FROM = 1 << 16  # samples from which `_Projection` forms X^T X by syrk (five columns,
+# measured: 0.4x the time of gemm on a copy at 1e6 samples, 0.6x at 5e4, 2.8x at 2e4)
 UPDATE_REACH = 0.01  # one unknown: the Jacobian at a point this near (relative) to the last
 # one computed in full is carried from it (`_updated_slopes`: the forced response alone, not
 # the augmented system with twice its states) when the record determined k there to NARROW
@@ -4014,7 +4060,9 @@ class _Projection:
         return projection
 
     def _factorise(self, XT: np.ndarray) -> None:
-        gram = XT @ XT.copy().T  # (a copy: numpy's syrk for X^T X runs slower than gemm here)
+        # (numpy's syrk for X^T X runs slower than gemm on a copy of X^T, but for the
+        # longest records, where the copy is the dearer part)
+        gram = XT @ (XT.T if XT.shape[1] > SYRK_FROM else XT.copy().T)
         scale = np.sqrt(np.diag(gram))
         scale = np.where(scale > 0, scale, 1.0)
         gram = gram / np.outer(scale, scale)
@@ -4103,19 +4151,16 @@ def _prediction(Theta, record, k, noise: NoiseModel, settings, jacobian: bool, k
     free = along = None  # the free responses (initial state), a row per state; their slopes
     with np.errstate(all="ignore"):
         if augmented:
-            z, dz = _augmented(real, t, u, hold, np.zeros(real.order), steps)
-            forced, slopes = real.h @ z + real.d * u, _output_slope_rows(real, z, dz, u)
+            forced, slopes = _augmented_outputs(real, t, u, hold, steps)
         else:
             forced = _forced(real, t, u, hold, steps)
-        if initial_state and real.order:
-            free, along = _free_responses(real, t, steps, jacobian)
-        # the nuisances' rows (offset, free responses) in one contiguous array: the
-        # projection's products run on it as it is
-        XT = np.empty((int(offset) + (0 if free is None else free.shape[0]), t.size))
+        # the nuisances' rows (offset, free responses) in one contiguous array, the free
+        # responses written into it: the projection's products run on it as it is
+        XT = np.empty((int(offset) + (real.order if initial_state else 0), t.size))
         if offset:
             XT[0] = 1.0
-        if free is not None:
-            XT[int(offset) :] = free
+        if initial_state and real.order:
+            free, along = _free_responses(real, t, steps, jacobian, XT[int(offset) :])
         error, white = noise.whiten(y - forced), noise.whiten(XT, -1) if XT.shape[0] else XT
     if not (np.isfinite(error).all() and np.isfinite(white).all()):
         return _Prediction(math.inf, t.size, XT.shape[0]), basis
@@ -4138,21 +4183,29 @@ def _prediction(Theta, record, k, noise: NoiseModel, settings, jacobian: bool, k
             psi = slopes
         else:  # a static model
             psi = np.outer(real.dd, u)
-        output = forced
-        if free is not None:  # z0's response, and its slopes with z0 held
-            output, psi = forced + z0 @ free, psi + along(z0)
-    fitted = output + value
-    residuals = y - fitted
+        if free is not None:  # z0's slopes with z0 held (a new array: psi may be the basis')
+            moved = along(z0)
+            moved += psi
+            psi = moved
     na, nc = noise.orders
-    rows = [-noise.whiten(psi, -1)]
+    if na or nc:
+        fitted = forced + nu @ XT
+        residuals = y - fitted
+    else:  # white: the output error is the prediction error
+        residuals = eps
+        fitted = y - eps if keep else None
+    # J^T's rows: the unknowns', D's, C's (and the update's change), written in place
+    p = len(UNKNOWNS)
+    JT = np.empty((p + na + nc + (change is not None), t.size))
+    np.negative(noise.whiten(psi, -1), out=JT[:p])
     if na:
-        rows.append(_lagged(signal.lfilter([1.0], noise.ma, residuals), na))
+        JT[p : p + na] = _lagged(signal.lfilter([1.0], noise.ma, residuals), na)
     if nc:
-        rows.append(-_lagged(signal.lfilter([1.0], noise.ma, eps), nc))
+        JT[p + na : p + na + nc] = _lagged(signal.lfilter([1.0], noise.ma, eps), nc)
+        np.negative(JT[p + na : p + na + nc], out=JT[p + na : p + na + nc])
     if change is not None:
-        rows.append(noise.whiten(change, -1))
-    JT = np.concatenate(rows, 0)
-    free = JT[: len(UNKNOWNS)] @ JT[: len(UNKNOWNS)].T
+        JT[-1] = noise.whiten(change, -1)
+    free = JT[:p] @ JT[:p].T
     JT = projection.fit_rows(JT)[1]
     if change is not None:
         JT, moved = JT[:-1], JT[-1]

@@ -103,6 +103,9 @@ def test_fine_sampling_keeps_its_digits(dc_drive):
     assert np.max(np.abs(states[:, 4] - last)) < 1e-11
 
 
+OUTPUTS = np.array([[1.0, -0.5, 2.0], [0.0, 1.0, 0.0]])  # output rows for `_schur_rows`' H
+
+
 def _companion(poles) -> np.ndarray:
     A = np.eye(3, k=1)
     A[-1] = -np.real(np.poly(poles))[:0:-1]
@@ -127,6 +130,7 @@ def test_schur_rows_follow_the_step_by_step_propagation(dc_drive, A):
     start = np.array([0.3, -0.2, 0.1])
     V, _, rows = dc_drive._schur_rows(A, B, t, W, ("zoh",) * 3, start)
     states = rows if V is None else V @ rows
+    outputs = dc_drive._schur_rows(A, B, t, W, ("zoh",) * 3, start, H=OUTPUTS)[2]  # (alone)
     E = linalg.expm(np.block([[A, B[:, None]], [np.zeros((1, 4))]]) * h)
     for j in range(3):
         x, expected = start.copy(), [start]
@@ -135,6 +139,7 @@ def test_schur_rows_follow_the_step_by_step_propagation(dc_drive, A):
             expected.append(x)
         scale = max(1.0, np.abs(states[j]).max())
         assert np.max(np.abs(states[j] - np.array(expected).T)) < 1e-12 * scale
+        assert np.max(np.abs(outputs[j] - OUTPUTS @ np.array(expected).T)) < 1e-11 * scale
 
 
 @pytest.mark.parametrize(
@@ -159,6 +164,7 @@ def test_schur_rows_in_blocks_follow_the_step_by_step_propagation(dc_drive, A, s
     start = np.array([0.3, -0.2, 0.1])
     V, _, rows = dc_drive._schur_rows(A, B, t, W, holds, start)
     states = rows if V is None else V @ rows
+    outputs = dc_drive._schur_rows(A, B, t, W, holds, start, H=OUTPUTS)[2]  # (alone)
     augmented = np.zeros((5, 5))  # [x; w; w'] with w' held over each interval
     augmented[:3, :3], augmented[:3, 3], augmented[3, 4] = A, B, 1.0
     E = linalg.expm(augmented * h)
@@ -170,3 +176,4 @@ def test_schur_rows_in_blocks_follow_the_step_by_step_propagation(dc_drive, A, s
             expected.append(x)
         scale = max(1.0, np.abs(states[j]).max())
         assert np.max(np.abs(states[j] - np.array(expected).T)) < 1e-12 * scale
+        assert np.max(np.abs(outputs[j] - OUTPUTS @ np.array(expected).T)) < 1e-11 * scale
