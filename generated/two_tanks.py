@@ -922,10 +922,17 @@ def _interpolation(h: np.ndarray, hold: str) -> np.ndarray:
 def _transitions(A, B, steps: np.ndarray, hold: str) -> tuple[np.ndarray, np.ndarray]:
     """Phi (k, s, s) and Gamma (k, 2, s) for each step, exact for the hold: over one
     interval, z_(i+1) = Phi z_i + Gamma^T [w_i, w_(i+1)]."""
+    Phi, Gamma = _hold_transitions(A, B, steps, (hold,))
+    return Phi, Gamma[:, 0]
+
+
+def _hold_transitions(A, B, steps: np.ndarray, holds: tuple) -> tuple[np.ndarray, np.ndarray]:
+    """`_transitions` for signals of several holds, from one exponential per step: Phi (k,
+    s, s) and Gamma (k, signal, 2, s)."""
     order = A.shape[0]
     E = linalg.expm(_drift(A, B) * steps[:, None, None])
-    Gamma = E[:, :order, order:] @ _interpolation(steps, hold)
-    return E[:, :order, :order], np.swapaxes(Gamma, 1, 2)
+    found = {hold: np.swapaxes(E[:, :order, order:] @ _interpolation(steps, hold), 1, 2) for hold in set(holds)}
+    return E[:, :order, :order], np.stack([found[hold] for hold in holds], 1)
 
 
 def _interval_maps(A, B, steps, beta: float, signals: tuple, forms: np.ndarray, span=None):
@@ -2770,6 +2777,7 @@ def _convexity_lost(time: float) -> str:
 # adds over records and experiments.
 
 NUISANCE_NAMES = ("offset", "initial state")
+TIME_SCALE = 1e6  # the model's time constants this far outside the record's: another unit
 
 
 def _derivatives(c: np.ndarray, needs: tuple[int, ...]) -> np.ndarray:
@@ -2795,58 +2803,141 @@ def _filtered_moments(c, t, W, holds, needs, beta: float = 0.0) -> np.ndarray:
     """int e^(-beta (t_end - tau)) D D^T dtau over the record, D = the filtered derivatives
     of the signals W (one per row, each interpolated per its hold; see `_derivatives`).
     Exact for the holds (see above): the weight is e^(-beta (t_end - t_l)) at an interval's
-    start, times e^(beta tau) within it, which shifts G by beta/2. At regular sampling the
-    filter states come in A's Schur coordinates with each interval's two samples
-    (`_schur_rows`, every signal at once), and their Gram matrix is mapped to v once."""
+    start, times e^(beta tau) within it, which shifts G by beta/2.
+
+    Everything is done in the filter's balanced real Schur coordinates z = V^-1 x
+    (`_schur_coordinates`: the cascade for (1 + sT)^q), with each signal's level and its
+    increment over the interval (the slope times h): there every state has the signal's
+    own scale whatever the time unit, where the companion states s^i w / C differ by T^i.
+    The intervals' Gram matrices (`_blocked_gram`, else `_interval_grams`) go through the
+    integral over the interval (`_interval_integral`) and only then to the derivatives."""
     order = c.size - 1
     A, B = _realisation(c)
-    width = order + 2
-    count = len(holds)
-    d = count * width
+    F, V, inverse, blocks = _schur_coordinates(A)
+    g = inverse @ B
     steps = _Steps.of(t)
-    rows = np.empty((count, width, t.size))  # per signal and sample: [z; w_i; w_(i+1)]
-    found = _schur_rows(A, B, t, W, holds, steps=steps, out=rows)
-    to_v = np.eye(d)  # rows to v = [x; level; slope] per signal
-    if found is None:
-        rows[:, :order] = _responses(A, B, t, W, holds).transpose(0, 2, 1)
-        rows[:, order] = W
-    h = steps.at(steps.values) if steps.index is not None else steps.values[0]
-    for j, hold in enumerate(holds):
-        at = j * width
-        if found is not None and found[0] is not None:
-            to_v[at : at + order, at : at + order] = found[0]
-        if steps.index is not None:  # the slope itself: its interval's own step
-            rows[j, order + 1] = 0.0
-            if hold == "linear":
-                rows[j, order + 1, :-1] = np.diff(W[j]) / h
-        else:
-            to_v[at + order + 1, at + order + 1] = 0.0
-            if hold == "linear":
-                to_v[at + order + 1, at + order : at + width] = [-1.0 / h, 1.0 / h]
-            if found is None:
-                rows[j, order + 1, :-1], rows[j, order + 1, -1] = W[j, 1:], W[j, -1]
-    X = rows.reshape(d, t.size)[:, :-1]  # the last sample starts no interval
-    if beta:
-        X = X * np.exp(-0.5 * beta * (t[-1] - t[:-1]))
-    G = 0.5 * beta * np.eye(d)  # each signal's drift on the diagonal (block_diag's cost, a
-    drift = _drift(A, B)  # tenth of a millisecond, is a record's filtering at 1e3 samples)
-    for j in range(count):
-        G[j * width : (j + 1) * width, j * width : (j + 1) * width] += drift
-    block = np.zeros((steps.values.size, 2 * d, 2 * d))
-    block[:, :d, :d] = -G
-    block[:, d:, d:] = G.T
-    if steps.index is None:
-        block[0, :d, d:] = to_v @ (X @ X.T) @ to_v.T
-    else:  # one Gram matrix per distinct step
-        for lo in range(0, X.shape[1], 4096):
-            part = X[:, lo : lo + 4096].T
-            outer = part[:, :, None] * part[:, None, :]
-            np.add.at(block[:, :d, d:], steps.index[lo : lo + 4096], outer)
-    E = linalg.expm(block * steps.values[:, None, None])
-    M = (np.swapaxes(E[:, d:, d:], 1, 2) @ E[:, :d, d:]).sum(0)
+    grams = None
+    if steps.index is None and blocks is not None:
+        grams = _blocked_gram(F, g, blocks, steps.values[0], t, W, holds, beta)
+    if grams is None:
+        grams = _interval_grams(F, g, t, W, holds, steps, beta)
+    M = sum(h * _interval_integral(F, g, len(holds), h, beta, Q) for h, Q in zip(steps.values, grams))
     S = _derivatives(c, needs)
+    if V is not None:  # S acts on x = V z
+        S = S.reshape(S.shape[0], len(holds), order + 2)
+        S[:, :, :order] = S[:, :, :order] @ V
+        S = S.reshape(S.shape[0], -1)
     M = S @ M @ S.T
     return 0.5 * (M + M.T)
+
+
+def _blocked_gram(F, g, blocks, h: float, t, W, holds, beta: float) -> list[np.ndarray] | None:
+    """[sum over the intervals of e^(-beta (t_end - t_l)) v_l v_l^T] at regular sampling,
+    v_l = each signal's [z_l; w_l; w_(l+1) - w_l] (the increment 0 for a held signal), z in
+    the quasi-triangular F's coordinates; None where `_blocked` does not apply. From the
+    blocks of `_blocked` (m samples each: v_(bm+l) = P_b Map_l, P_b the block's first state
+    and samples, every signal's): the Gram matrix of the N/m vectors P_b, then the m maps,
+    without forming the states within the blocks."""
+    order, count = F.shape[0], len(holds)
+    width, steps = order + 2, t.size - 1
+    Phi, Gamma = _hold_transitions(F, g, np.array([h]), holds)
+    found = _blocked(Phi[0], Gamma[0], np.zeros(order), blocks, W)
+    if found is None:
+        return None
+    m, powers, K, P, _ = found
+    size, full = order + m + 1, steps // m
+    Map = np.zeros((m, count, size, count, width))  # v_(bm+l) = P_b Map_l
+    keep = np.ones((count, size), dtype=bool)  # the entries of P_b that some v uses
+    step = np.arange(m)
+    for j, hold in enumerate(holds):
+        Map[:, j, :order, j, :order] = powers[:m].transpose(0, 2, 1)
+        Map[:, j, order:, j, :order] = K[j, :m]
+        Map[step, j, order + step, j, order] = 1.0
+        if hold == "linear":
+            Map[step, j, order + step, j, order + 1] = -1.0
+            Map[step, j, order + step + 1, j, order + 1] = 1.0
+        else:  # (held: the last sample drives no state within the block)
+            keep[j, -1] = False
+    if beta:
+        Map *= np.exp(0.5 * beta * h * step)[:, None, None, None, None]
+    P = P.transpose(1, 0, 2)  # (blocks, signal, P_b's entries)
+    if beta:
+        P = P * np.exp(-0.5 * beta * (t[-1] - t[: steps : m]))[:, None, None]
+    Q = 0.0
+    if full < P.shape[0]:  # the last, shorter block (its samples past the end are 0)
+        tail = P[full].reshape(-1) @ Map[: steps - full * m].reshape(steps - full * m, -1, count * width)
+        Q = tail.T @ tail
+    # only the entries of P_b that some v uses, and one for all of a constant signal's samples
+    # (the unit step's): the Gram matrix costs the square of their number
+    for j in range(count):
+        if W[j, 0] == W[j, -1] and (W[j] == W[j, 0]).all():
+            Map[:, j, order] = Map[:, j, order:].sum(1)
+            keep[j, order + 1 :] = False
+    Map = Map[:, keep].reshape(m, -1, count * width)
+    top = P[:full, keep]
+    gram = top.T @ top
+    Q = Q + Map.reshape(-1, count * width).T @ (gram @ Map).reshape(-1, count * width)
+    return [Q]
+
+
+def _interval_grams(F, g, t, W, holds, steps: "_Steps", beta: float) -> list[np.ndarray]:
+    """`_blocked_gram`'s sums for any sampling, one per distinct step (`_Steps`), from the
+    states at every sample (`_responses`)."""
+    order, count = F.shape[0], len(holds)
+    width = order + 2
+    rows = np.empty((count, width, t.size - 1))
+    rows[:, :order] = _responses(F, g, t, W, holds)[:, :-1].transpose(0, 2, 1)
+    rows[:, order] = W[:, :-1]
+    for j, hold in enumerate(holds):
+        rows[j, order + 1] = np.diff(W[j]) if hold == "linear" else 0.0
+    X = rows.reshape(count * width, -1)
+    if beta:
+        X = X * np.exp(-0.5 * beta * (t[-1] - t[:-1]))
+    if steps.index is None:
+        return [X @ X.T]
+    grams = np.zeros((steps.values.size, X.shape[0], X.shape[0]))
+    for lo in range(0, X.shape[1], 4096):
+        part = X[:, lo : lo + 4096].T
+        np.add.at(grams, steps.index[lo : lo + 4096], part[:, :, None] * part[:, None, :])
+    return list(grams)
+
+
+HALF_RATE = 0.5  # |G| sigma at most this in a Van Loan exponential: e^(-G sigma) stays near 1
+
+
+def _interval_integral(F, g, count: int, h: float, beta: float, Q: np.ndarray) -> np.ndarray:
+    """int_0^1 e^(G s) Q e^(G^T s) ds: the integral over one interval of h (time tau = h s)
+    of v v^T for every start vector of the Gram matrix Q, v = each signal's [z; level;
+    increment] with z' = h (F z + g level), level' = increment (G also shifted by beta h /
+    2, the weight). Van Loan's block exponential over a fraction 2^-k of the interval short
+    enough that e^(-G s) stays near 1 (over the whole one, for a filter fast against the
+    sampling, it grows as e^(h / T) and the difference that makes the integral loses every
+    digit), then k doublings M(2s) = M(s) + e^(G s) M(s) e^(G^T s), sums of positive
+    terms. Q is scaled to 1 in the exponential (its backward error is relative to the
+    whole block)."""
+    order = F.shape[0]
+    width = order + 2
+    d = count * width
+    one = np.zeros((width, width))
+    one[:order, :order], one[:order, order], one[order, order + 1] = h * F, h * g, 1.0
+    G = 0.5 * beta * h * np.eye(d)
+    for j in range(count):
+        G[j * width : (j + 1) * width, j * width : (j + 1) * width] += one
+    rate = np.abs(one[: order + 1, : order + 1]).sum(0).max() + 0.5 * beta * h
+    halvings = max(0, math.ceil(math.log2(rate / HALF_RATE))) if rate > HALF_RATE else 0
+    size = np.abs(Q).max()
+    if not size > 0:
+        return Q.copy()  # 0 (or not finite: said so by the caller)
+    s = 2.0**-halvings
+    block = np.zeros((2 * d, 2 * d))
+    block[:d, :d], block[:d, d:], block[d:, d:] = -s * G, (s / size) * Q, s * G.T
+    E = linalg.expm(block)
+    Phi = E[d:, d:].T  # e^(G s)
+    M = Phi @ E[:d, d:]
+    for _ in range(halvings):
+        M = M + Phi @ M @ Phi.T
+        Phi = Phi @ Phi
+    return size * 0.5 * (M + M.T)
 
 
 def _project_out(M: np.ndarray, keep: int) -> np.ndarray:
@@ -2958,6 +3049,32 @@ def _overflow(t: np.ndarray, c: np.ndarray) -> str:
         f"the moments of the filtered signals overflow floating point: the record spans "
         f"{float(t[-1] - t[0]):.3g} time units with samples {float(np.median(np.diff(t))):.3g} "
         f"apart, and {which}: are the times in the model's unit (seconds)?"
+    )
+
+
+def _check_time_scale(Theta: np.ndarray, k, step: float, span: float) -> None:
+    """Refuse a record whose times are in another unit than the model's: every time
+    constant of A(s, k) (k where the fit starts) under 1/TIME_SCALE sampling intervals (each
+    mode dies out between samples) or over TIME_SCALE times the record (the record sees none
+    move). The moments stay exact in any unit (they are formed in the filter's own
+    coordinates), so that this is said here rather than left to their overflow."""
+    a = np.trim_zeros((Theta @ _K(k))[n::-1], "f")
+    with np.errstate(all="ignore"):
+        rates = np.abs(np.roots(a)) if a.size > 1 and np.isfinite(a).all() else np.zeros(0)
+    rates = rates[np.isfinite(rates) & (rates > 0)]
+    if not rates.size:
+        return
+    fastest, slowest = 1.0 / rates.max(), 1.0 / rates.min()
+    if slowest * TIME_SCALE < step:
+        why = f"all under 1/{TIME_SCALE:g} of a sampling interval: every mode dies out between samples"
+    elif fastest > TIME_SCALE * span:
+        why = f"all over {TIME_SCALE:g} times the record: it sees none of them move"
+    else:
+        return
+    raise ValueError(
+        f"the record spans {span:.3g} time units with samples {step:.3g} apart, and the model's "
+        f"time constants at k = {_shown(k)} are {fastest:.3g} to {slowest:.3g}, {why}: are "
+        "the times in the model's unit (seconds)?"
     )
 
 
@@ -3578,6 +3695,33 @@ def _block_starts(Phi_m: np.ndarray, drives: np.ndarray, z0, blocks, modes, m: i
             x[:, start:end, lo + 1 : hi + 1] = 2.0 * (vector * xi[:, None, :]).real
 
 
+def _blocked(Phi: np.ndarray, Gamma: np.ndarray, z0: np.ndarray, blocks, samples: np.ndarray, states=None):
+    """`_triangular`'s block recursion: (m, Phi^0..Phi^m, K, V, x) with V (signals, B, order
+    + m + 1) each block's [x_b, its m + 1 samples (then 0)] and x (signals, order, B + 1) the
+    block starts x_0..x_B, for the samples (signals, N + 1) from z0; None when Phi is not
+    finite or a 2 x 2 block is not a well-conditioned complex pair. m = TRIANGULAR_BLOCK, or
+    1 on short records (the block starts are then every state: written into `states` if
+    given)."""
+    if not np.isfinite(Phi).all():
+        return None
+    modes = {start: _pair_mode(Phi[start : start + 2, start : start + 2]) for start, size in blocks if size == 2}
+    if any(mode is None for mode in modes.values()):
+        return None
+    order, count, steps = Phi.shape[0], Gamma.shape[0], samples.shape[1] - 1
+    m = TRIANGULAR_BLOCK if steps >= BLOCKED_FROM * TRIANGULAR_BLOCK else 1
+    powers, K = _step_maps(Phi, Gamma, m)
+    full, B = steps // m, -(-steps // m)  # blocks of m steps, and with the shorter last one
+    V = np.zeros((count, B, order + m + 1))
+    V[:, :full, order:-1] = samples[:, : full * m].reshape(count, full, m)
+    V[:, :full, -1] = samples[:, m : full * m + 1 : m]
+    if full < B:
+        V[:, full, order : order + steps + 1 - full * m] = samples[:, full * m :]
+    x = states if m == 1 and states is not None else np.empty((count, order, B + 1))
+    _block_starts(powers[m], np.swapaxes(V[:, :, order:] @ K[:, m], 1, 2), z0, blocks, modes, m, x)
+    V[:, :, :order] = np.swapaxes(x[:, :, :B], 1, 2)
+    return m, powers, K, V, x
+
+
 def _triangular(Phi: np.ndarray, Gamma: np.ndarray, z0: np.ndarray, blocks, out: np.ndarray,
                 H: np.ndarray | None = None, samples: np.ndarray | None = None) -> bool:  # fmt: skip
     """States z_0..z_N of z_(i+1) = Phi z_i + Gamma[j]^T [w_i, w_(i+1)] for each signal j
@@ -3593,33 +3737,21 @@ def _triangular(Phi: np.ndarray, Gamma: np.ndarray, z0: np.ndarray, blocks, out:
     the blocks' drives, one scalar recursion per diagonal block over the N/m blocks
     (`_block_starts`), and one product [x_b, W_b] [Phi^l; K_l] for all the states within
     them."""
-    if not np.isfinite(Phi).all():
-        return False
-    modes = {start: _pair_mode(Phi[start : start + 2, start : start + 2]) for start, size in blocks if size == 2}
-    if any(mode is None for mode in modes.values()):
-        return False
     order, count, steps = Phi.shape[0], Gamma.shape[0], out.shape[2] - 1
     rows = order if H is None else H.shape[0]
+    if not np.isfinite(Phi).all():
+        return False
     out[:, :rows, 0] = z0 if H is None else H @ z0
-    if steps == 0:
-        return True
-    m = TRIANGULAR_BLOCK if steps >= BLOCKED_FROM * TRIANGULAR_BLOCK else 1  # (m = 1: the
-    # states are the block starts)
-    powers, K = _step_maps(Phi, Gamma, m)
-    full, B = steps // m, -(-steps // m)  # blocks of m steps, and with the shorter last one
-    V = np.zeros((count, B, order + m + 1))  # per block: [x_b, its m + 1 samples (then 0)]
-    samples = out[:, order] if samples is None else samples
-    V[:, :full, order:-1] = samples[:, : full * m].reshape(count, full, m)
-    V[:, :full, -1] = samples[:, m : full * m + 1 : m]
-    if full < B:
-        V[:, full, order : order + steps + 1 - full * m] = samples[:, full * m :]
-    x = out[:, :order] if m == 1 and H is None else np.empty((count, order, B + 1))
-    _block_starts(powers[m], np.swapaxes(V[:, :, order:] @ K[:, m], 1, 2), z0, blocks, modes, m, x)
+    found = _blocked(Phi, Gamma, z0, blocks, out[:, order] if samples is None else samples,
+                     out[:, :order] if H is None else None)  # fmt: skip
+    if found is None:
+        return False
+    m, powers, K, V, x = found
     if m == 1:
         if H is not None:
             np.matmul(H, x, out=out[:, :rows])
         return True
-    V[:, :, :order] = np.swapaxes(x[:, :, :B], 1, 2)
+    full, B = steps // m, V.shape[1]
     maps = np.empty((count, order, order + m + 1, m))  # state i at step l from [x_b, W_b]
     maps[:, :, :order] = powers[:m].transpose(1, 2, 0)
     maps[:, :, order:] = K[:, :m].transpose(0, 3, 2, 1)
@@ -4708,6 +4840,7 @@ def fit_records(records, *, method: str = "pem", noise: str = "auto", C="auto", 
     interval, span = _median_step(shapes), min(shape.span for shape in shapes)
     if automatic:
         c = _filter_for(Theta, k0 if k0 is not None else _model_point(), interval, span)
+    _check_time_scale(Theta, k0 if k0 is not None else _model_point(), interval, span)
     with np.errstate(all="ignore"):
         k, coefficients, total, found = _step(Theta, records, None, c, bounds, beta, settings)
         if automatic and method == "ls" and np.all(np.isfinite(k)):

@@ -37,15 +37,20 @@ def prbs_record(module, t_end: float, snr_db: float | None, seed: int = 1, perio
 @pytest.mark.parametrize(
     "scale,options,message",
     [
-        (1e-200, {"C": "(1+s)^5"}, r"the moments of the filtered signals overflow floating point: "
-         r"the record spans 1e-199 time units with samples 1e-202 apart"),
-        (1e-30, {}, r"overflow floating point: the record spans 1e-29 time units"),
+        (1e-200, {"C": "(1+s)^5"}, r"^the record spans 1e-199 time units with samples 1e-202 "
+         r"apart, and the model's time constants at k = 10 are 0\.112 to 9\.99, all over 1e\+06 "
+         r"times the record: it sees none of them move: are the times in the model's unit"),
+        (1e-30, {}, r"^the record spans 1e-29 time units .* are the times in the model's unit"),
         (1e-300, {"C": "(1+s)^5", "method": "ls"}, r"are the times in the model's unit"),
+        (1e12, {}, r"all under 1/1e\+06 of a sampling interval: every mode dies out between "
+         r"samples: are the times in the model's unit \(seconds\)\?$"),
     ],
 )  # fmt: skip
 def test_times_out_of_scale_are_clear_errors(dc_drive, scale, options, message):
     """Times in the wrong unit made the moments overflow: numpy's LinAlgError ('SVD did not
-    converge') escaped from fit, and the command line printed it after LAPACK's own lines."""
+    converge') escaped from fit, and the command line printed it after LAPACK's own lines.
+    The moments are now exact in any unit: the fit says so from the model's time constants
+    against the record's (it had relied on the moments overflowing)."""
     t, u, y = prbs_record(dc_drive, 10.0, None)
     with pytest.raises(ValueError, match=message):
         dc_drive.fit(t * scale, u, y, hold="zoh", **options)
@@ -79,7 +84,7 @@ def test_values_out_of_range_are_clear_errors(dc_drive, tmp_path, capsys):
     path.write_text("t,u,y\n" + "".join(f"{a!r},{b!r},{c!r}\n" for a, b, c in rows))
     status = main(["fit", DC_DRIVE, "--data", str(path), "--filter", "(1+s)^5"])
     err = capsys.readouterr().err
-    assert status == 2 and "overflow floating point" in err and "SVD" not in err
+    assert status == 2 and "are the times in the model's unit" in err and "SVD" not in err
 
 
 def test_the_automatic_filter_on_a_record_too_short_warns(dc_drive):
