@@ -922,13 +922,16 @@ def _interpolation(h: np.ndarray, hold: str) -> np.ndarray:
 def _transitions(A, B, steps: np.ndarray, hold: str) -> tuple[np.ndarray, np.ndarray]:
     """Phi (k, s, s) and Gamma (k, 2, s) for each step, exact for the hold: over one
     interval, z_(i+1) = Phi z_i + Gamma^T [w_i, w_(i+1)]."""
-    Phi, Gamma = _hold_transitions(A, B, steps, (hold,))
-    return Phi, Gamma[:, 0]
+    order = A.shape[0]
+    E = linalg.expm(_drift(A, B) * steps[:, None, None])
+    Gamma = E[:, :order, order:] @ _interpolation(steps, hold)
+    return E[:, :order, :order], np.swapaxes(Gamma, 1, 2)
 
 
 def _hold_transitions(A, B, steps: np.ndarray, holds: tuple) -> tuple[np.ndarray, np.ndarray]:
     """`_transitions` for signals of several holds, from one exponential per step: Phi (k,
-    s, s) and Gamma (k, signal, 2, s)."""
+    s, s) and Gamma (k, signal, 2, s) (`_transitions` keeps its own layout of Gamma, in
+    which its callers' products are summed)."""
     order = A.shape[0]
     E = linalg.expm(_drift(A, B) * steps[:, None, None])
     found = {hold: np.swapaxes(E[:, :order, order:] @ _interpolation(steps, hold), 1, 2) for hold in set(holds)}
