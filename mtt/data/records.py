@@ -244,8 +244,8 @@ def initial_state(module: ModuleType, given, u0: float, k) -> np.ndarray | None:
     if states is None:
         raise DataError(
             "x0 sets the initial state of a nonlinear model's simulator (a model with "
-            "nonlinear relations, without --at); the transfer function of a linear or "
-            "small-signal model is simulated from rest",
+            "nonlinear relations, not linearised about an operating point); the transfer "
+            "function of a linear or small-signal model is simulated from rest",
             "x0",
         )
     listed = f"{len(states)} state{'s' * (len(states) != 1)}: {', '.join(states)}"
