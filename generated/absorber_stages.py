@@ -1704,8 +1704,8 @@ def _split_matrices(size: int) -> np.ndarray:
 
 def _children_matrix() -> np.ndarray:
     """(2^p prod(SHAPE), prod(SHAPE)): the flattened Bernstein coefficients of a box's 2^p
-    halves (child c, a row of _CHILDREN, first) from the box's, the splits of every axis
-    in one product."""
+    halves (child c a row of _CHILDREN) from the box's, the splits of every axis in one
+    product."""
     K = np.ones(())
     for size in SHAPE:
         K = np.multiply.outer(K, _split_matrices(size))  # axes: side, child's, box's (per axis)
@@ -1719,23 +1719,25 @@ _CHILDREN = np.array(np.unravel_index(np.arange(2 ** len(SHAPE)), (2,) * len(SHA
 _CORNERS = np.ravel_multi_index(tuple((_CHILDREN * (np.array(SHAPE) - 1)).T), SHAPE)
 
 
-def _difference_rows() -> tuple[np.ndarray, np.ndarray]:
-    """D and where each axis' rows start: flat @ D.T are the differences of neighbouring
-    Bernstein coefficients along each axis in turn (J's slope's enclosure along it)."""
+def _slope_rows() -> tuple[np.ndarray, np.ndarray]:
+    """S and where each group of its rows starts: flat @ S.T are the differences of
+    neighbouring Bernstein coefficients along each axis in turn (J's slope's enclosure
+    along it), then the same negated: the least of a group above 0 says J rises along that
+    axis, or (negated) falls."""
     rows = [np.diff(np.eye(math.prod(SHAPE)).reshape((-1,) + SHAPE), axis=1 + axis)
             .reshape(math.prod(SHAPE), -1).T for axis in range(len(SHAPE))]  # fmt: skip
+    rows += [-r for r in rows]
     return np.concatenate(rows), np.cumsum([0] + [len(r) for r in rows[:-1]])
 
 
-_DIFFERENCES, _DIFFERENCE_STARTS = _difference_rows()
+_SLOPES, _SLOPE_STARTS = _slope_rows()
 
 
 def _children(B: np.ndarray) -> np.ndarray:
     """The flattened Bernstein coefficients (2^p boxes, prod(SHAPE)) of the 2^p halves of
     each box (boxes, prod(SHAPE)): halved along every axis, child c (a row of _CHILDREN:
-    lower 0 or upper 1 along each axis) of box b at c's place times the boxes plus b."""
-    halves = (B @ _SPLIT_ALL.T).reshape(B.shape[0], _CHILDREN.shape[0], B.shape[1])
-    return halves.transpose(1, 0, 2).reshape(-1, B.shape[1])
+    lower 0 or upper 1 along each axis) of box b at b times 2^p plus c."""
+    return (B @ _SPLIT_ALL.T).reshape(-1, B.shape[1])
 
 
 def _free_hessian(x: np.ndarray, gradient: np.ndarray, H: np.ndarray, strict: bool = True):
@@ -1757,24 +1759,28 @@ def _descent_steps(x: np.ndarray, gradient: np.ndarray, H: np.ndarray) -> np.nda
     """The descents' Newton steps at x: -(H + shift I)^-1 g on the coordinates a bound does
     not hold (`_free_hessian`), H shifted where it is not positive definite (its smallest
     eigenvalue raised to 1e-9 of its largest entry; I where J is flat). For p = 2 in closed
-    form on H's entries (the arithmetic of `_lowest_curvature` and `_solve`), in a third of
-    the numpy calls."""
-    free, H = _free_hessian(x, gradient, H)
-    if not free.all():
+    form on H's entries (the arithmetic of `_lowest_curvature` and `_solve`); when every H
+    is positive definite with det H / trace H (below its smallest eigenvalue) above twice
+    that, no shift (most steps), and the eigenvalue is not computed."""
+    if x.min() <= 0.0 or x.max() >= 1.0:
+        free, H = _free_hessian(x, gradient, H)
         gradient = np.where(free, gradient, 0.0)
     scale = np.abs(H).max((1, 2))
     if x.shape[1] != 2:
         shift = np.maximum(1e-9 * scale - _lowest_curvature(H), 0.0) + (scale == 0)
         return -_solve(H + shift[:, None, None] * np.eye(x.shape[1]), gradient)
     a, b, d = H[:, 0, 0], H[:, 0, 1], H[:, 1, 1]
-    middle = 0.5 * (a + d)
-    radius = np.hypot(0.5 * (a - d), b)
-    positive = middle > 0
-    lowest = np.where(positive, (a * d - b * b) / np.where(positive, middle + radius, 1.0), middle - radius)
-    shift = np.maximum(1e-9 * scale - lowest, 0.0) + (scale == 0)
-    a, d = a + shift, d + shift
+    determinant = a * d - b * b
+    if not ((a > 0.0) & (determinant >= 2e-9 * scale * (a + d))).all():
+        middle = 0.5 * (a + d)
+        radius = np.hypot(0.5 * (a - d), b)
+        positive = middle > 0
+        lowest = np.where(positive, determinant / np.where(positive, middle + radius, 1.0), middle - radius)
+        shift = np.maximum(1e-9 * scale - lowest, 0.0) + (scale == 0)  # J flat here: I
+        a, d = a + shift, d + shift
+        determinant = a * d - b * b
     g, h = gradient[:, 0], gradient[:, 1]
-    return np.stack([d * g - b * h, a * h - b * g], 1) / -(a * d - b * b)[:, None]
+    return np.stack([d * g - b * h, a * h - b * g], 1) / -determinant[:, None]
 
 
 def _descend(U: np.ndarray, x: np.ndarray, iterations: int = 80) -> tuple[np.ndarray, np.ndarray]:
@@ -1918,10 +1924,9 @@ def _search(T: np.ndarray, centre, box: np.ndarray, starts=()) -> _Minima:
                 continue
         drop = boxes.min(1) > best - tolerance  # the least coefficient: a lower bound
         margin = 64 * EPS * float(np.abs(boxes).max())
-        slopes = boxes @ _DIFFERENCES.T
-        rising = np.minimum.reduceat(slopes, _DIFFERENCE_STARTS, axis=1) > margin
-        falling = np.maximum.reduceat(slopes, _DIFFERENCE_STARTS, axis=1) < -margin
-        drop |= (rising & (corners > 0.0)).any(1) | (falling & (corners + side_length < 1.0)).any(1)
+        monotonic = np.minimum.reduceat(boxes @ _SLOPES.T, _SLOPE_STARTS, axis=1) > margin  # rising, falling
+        inner = np.concatenate([corners > 0.0, corners < 1.0 - side_length], 1)  # the lower face inside
+        drop |= (monotonic & inner).any(1)
         if basins.size:
             inside = ((corners[:, None] >= basins[None, :, 0])
                       & (corners[:, None] + side_length <= basins[None, :, 1])).all(-1)  # fmt: skip
@@ -1934,7 +1939,7 @@ def _search(T: np.ndarray, centre, box: np.ndarray, starts=()) -> _Minima:
             break
         side_length *= 0.5
         boxes = _children(boxes)
-        corners = (corners[None] + side_length * _CHILDREN[:, None]).reshape(-1, p)
+        corners = (corners[:, None] + side_length * _CHILDREN).reshape(-1, p)
     if not certified and boxes.shape[0]:  # what is left: look there too
         order = np.argsort(boxes.min(1))[:64]
         add(corners[order] + 0.5 * side_length)
