@@ -1371,6 +1371,10 @@ _HESSIAN = np.array([np.ravel_multi_index(tuple((_UNIT[i] + _UNIT).T), SHAPE)
 _HESSIAN_SCALE = 1.0 + np.eye(len(UNKNOWNS))  # d2/dk_i^2 is twice its coefficient
 
 
+_AXIS_PLACES = [[(Ellipsis, i) + (slice(None),) * (len(SHAPE) - 1 - axis) for i in range(size)]
+                for axis, size in enumerate(SHAPE)]  # fmt: skip  # a tensor's slices at each power along each axis
+
+
 def _tensor(P: np.ndarray) -> np.ndarray:
     """Rows over BASIS (..., len(BASIS)) as flattened tensors (..., prod(SHAPE))."""
     T = np.zeros(P.shape[:-1] + (math.prod(SHAPE),))
@@ -1381,17 +1385,17 @@ def _tensor(P: np.ndarray) -> np.ndarray:
 def _shift(T: np.ndarray, centre: np.ndarray) -> np.ndarray:
     """The Taylor tensors about `centre` (..., unknowns) of the flattened tensors T (...,
     prod(SHAPE)): the coefficients of J(centre + d) in d, by synthetic division by
-    (x - centre_i) along each axis i."""
-    lead = np.broadcast_shapes(T.shape[:-1], np.shape(centre)[:-1])
-    T = np.array(np.broadcast_to(T, lead + T.shape[-1:])).reshape(lead + SHAPE)
-    centre = np.broadcast_to(centre, lead + (len(UNKNOWNS),))
-    for axis, size in enumerate(SHAPE):
-        moved = np.moveaxis(T, len(lead) + axis, -1)  # a view: the division works in place
-        c = centre[..., axis].reshape(lead + (1,) * (len(SHAPE) - 1))
-        for low in range(size - 1):
-            for i in range(size - 2, low - 1, -1):
-                moved[..., i] += c * moved[..., i + 1]
-    return T.reshape(lead + (-1,))
+    (x - centre_i) along each axis i, in place on a copy (slices by _AXIS_PLACES)."""
+    centre = np.asarray(centre, dtype=float)
+    lead = (T[..., 0] + centre[..., 0]).shape
+    R = np.empty(lead + SHAPE)
+    R[...] = T.reshape(T.shape[:-1] + SHAPE)
+    for axis, places in enumerate(_AXIS_PLACES):
+        c = centre[..., axis].reshape(centre.shape[:-1] + (1,) * (len(SHAPE) - 1))
+        for low in range(len(places) - 1):
+            for i in range(len(places) - 2, low - 1, -1):
+                R[places[i]] += c * R[places[i + 1]]
+    return R.reshape(lead + (-1,))
 
 
 def _local_form(A: np.ndarray):
@@ -1798,26 +1802,28 @@ def _descend(U: np.ndarray, x: np.ndarray, iterations: int = 80) -> tuple[np.nda
     p = x.shape[1]
     hessian, size = 1 + p + p * p, 2 + p + p * p  # columns: J, gradient, Hessian, |J|, its gradient
     columns = np.concatenate([_jet_columns(U), _jet_columns(np.abs(U))[:, : 1 + p]], 1)
-    jets = _monomials(x) @ columns
+    here = x.copy()  # the moving starts' points (rows of x at `active`), and J's jets there
+    jets = _monomials(here) @ columns
     active = np.arange(x.shape[0])
     for _ in range(iterations):
-        here = x[active]
-        gradient, H = jets[:, 1 : 1 + p], jets[:, 1 + p : hessian].reshape(-1, p, p)
-        step = _descent_steps(here, gradient, H)
+        step = _descent_steps(here, jets[:, 1 : 1 + p], jets[:, 1 + p : hessian].reshape(-1, p, p))
         trials = np.minimum(np.maximum(here[:, None] + _TRIALS[None, :, None] * step[:, None], 0.0), 1.0)
         at = _monomials(trials) @ columns  # the first: here (step 0)
         values = at[..., 0]
         better = values[:, 1:] < values[:, :1] - ROUNDING * at[:, :1, hessian]
-        found = better.any(1)
         taken = 1 + np.argmax(better, 1)
         rows = np.arange(here.shape[0])
-        chosen = trials[rows, taken]
-        moved = found & (np.abs(chosen - here).max(1) > 4 * EPS)
-        x[active[found]] = chosen[found]
-        jets = at[rows[moved], taken[moved]]
-        active = active[moved]
+        chosen = np.where(better[rows, taken - 1][:, None], trials[rows, taken], here)
+        moved = np.abs(chosen - here).max(1) > 4 * EPS  # only where a step lowered J
+        if moved.all():
+            here, jets = chosen, at[rows, taken]
+            continue
+        x[active[~moved]] = chosen[~moved]
+        here, jets, active = chosen[moved], at[rows[moved], taken[moved]], active[moved]
         if active.size == 0:
             break
+    else:
+        x[active] = here
     order = np.lexsort(x.T[::-1])
     x = x[order]
     x = x[np.r_[True, np.abs(np.diff(x, axis=0)).max(1) > 1e-6]]  # starts that met
