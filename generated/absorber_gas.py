@@ -3616,7 +3616,7 @@ def _with_nuisances(t, u, y, k, *, hold: str, offset: bool, initial_state: bool,
 PAIR_CONDITION = 100.0  # a complex pair's eigenvectors worse conditioned: the general recursion
 TRIANGULAR_BLOCK = 16  # samples per block of `_triangular` (measured: 8 to 32 within 20 %)
 BLOCKED_FROM = 32  # blocks a record needs for them (on fewer, the maps cost what blocks save)
-TRIANGULAR_CHUNK = 1 << 15  # samples per chunk of `_triangular`'s block recursion
+TRIANGULAR_CHUNK = 1 << 17  # samples per chunk of `_triangular`'s block recursion
 TINY = 1e-280  # a state below it is 0 between chunks (inputs and outputs are above 1e-100)
 
 
@@ -4143,6 +4143,8 @@ RESIDUAL_ROUNDING = 1e-10  # residuals below this share of the output's spread (
 DAMPING = 1e-4  # the first Levenberg-Marquardt damping, relative to J^T J's diagonal
 GRAM_CONDITION = 1e8  # the nuisances' scaled Gram matrix factorised directly below this
 SAME_BASIN = 3.0  # a descent this many standard errors from a minimum found ends there
+LEFT_IN_SPAN = 1e-4  # `_Projection.gram_rows` by its one product where the nuisances leave
+# at least this share of each row's sum of squares
 SYRK_FROM = 1 << 16  # samples from which `_Projection` forms X^T X by syrk (five columns,
 # measured: 0.4x the time of gemm on a copy at 1e6 samples, 0.6x at 5e4, 2.8x at 2e4)
 UPDATE_REACH = 0.01  # one unknown: the Jacobian at a point this near (relative) to the last
@@ -4251,12 +4253,17 @@ class _Projection:
         """W^T (I - X X^+) W for the signals that are WT's rows: their Gram matrix less its
         part in X's span, (W Q)(W Q)^T with Q = X R^-1, from one product with X (where
         `fit_rows` takes four). Its rounding relative to the result grows as the share of
-        W in X's span: 1e-14 where X takes 99 % of it."""
+        W in X's span; where X takes more than 1 - LEFT_IN_SPAN of a row (the rounding
+        beyond 1e-12 of what is left), from the residuals of `fit_rows` instead."""
         gram = WT @ WT.T
         if not self.rank:
             return gram
         inside = (WT @ self.XT.T) @ self.inverse
-        return gram - inside @ inside.T
+        projected = gram - inside @ inside.T
+        if np.all(np.diag(projected) >= LEFT_IN_SPAN * np.diag(gram)):
+            return projected
+        rest = self.fit_rows(WT)[1]
+        return rest @ rest.T
 
     def _solve_rows(self, WT: np.ndarray) -> np.ndarray:
         return ((WT @ self.XT.T) @ self.inverse) @ self.inverse.T
