@@ -353,8 +353,9 @@ def _known_values(known: dict) -> dict[str, float]:
     return {name: _real(name, values[name]) for name in PARAMETERS}
 
 
-def _array(name: str, value) -> np.ndarray:
-    """A one-dimensional array of finite reals, or a ValueError that says what is wrong."""
+def _array(name: str, value, finite: bool = True) -> np.ndarray:
+    """A one-dimensional array of finite reals, or a ValueError that says what is wrong
+    (finite=False: of reals, their finiteness left to the caller, who has their `_peak`)."""
     if np.iscomplexobj(value):
         raise ValueError(f"{name} must be real, not complex")
     try:
@@ -367,19 +368,25 @@ def _array(name: str, value) -> np.ndarray:
         array = array.reshape(1)
     if array.ndim != 1:
         raise ValueError(f"{name} must be one-dimensional, not of shape {array.shape}")
-    if not np.isfinite(array).all():
+    if finite and not np.isfinite(array).all():
         bad = np.flatnonzero(~np.isfinite(array))[0]
         raise ValueError(f"{name}[{bad}] is {array[bad]}: every value must be finite")
     return array
 
 
-def _bounded(name: str, array: np.ndarray) -> None:
+def _peak(array: np.ndarray) -> float:
+    """max |x| over the array (NaN if it holds a NaN, 0 if empty): one reading of it, no
+    array of |x| formed."""
+    return float(max(array.max(), -array.min())) if array.size else 0.0
+
+
+def _bounded(name: str, array: np.ndarray, peak: float | None = None) -> None:
     """A signal whose squares and products stay within floating point (1e300 in a CSV file
     made fit's least squares fail inside LAPACK, "SVD did not converge"), or times whose
     steps stay above their rounding (one time of 1e308 fed to a Tracker made it refuse
-    every later sample)."""
+    every later sample). peak: its `_peak`, where the caller has it."""
     limit = MAX_TIME if name == "t" else MAX_SIGNAL
-    if array.size and np.abs(array).max() > limit:
+    if (_peak(array) if peak is None else peak) > limit:
         i = int(np.argmax(np.abs(array)))
         why = (
             "times must stay within 1e+15 in size (beyond, a time stamp's rounding exceeds a "
@@ -422,9 +429,20 @@ def _signals(*named: tuple[str, object], minimum: int, after: float = -math.inf)
                 f"sample's t = {after}"
             )
         return arrays
-    arrays = [_array(name, value) for name, value in named]
-    for (name, _), array in zip(named, arrays, strict=True):
-        _bounded(name, array)
+    return _signal_peaks(*named, minimum=minimum, after=after)[0]
+
+
+def _signal_peaks(*named: tuple[str, object], minimum: int,
+                  after: float = -math.inf) -> tuple[list, list[float]]:  # fmt: skip
+    """`_signals` of arrays, and each one's `_peak` (for checks of their range beyond
+    `_bounded`'s)."""
+    arrays = [_array(name, value, finite=False) for name, value in named]
+    peaks = [_peak(array) for array in arrays]  # (NaN or infinite: not finite)
+    for (name, _), array, peak in zip(named, arrays, peaks, strict=True):
+        if not math.isfinite(peak):
+            _array(name, array)  # (which says where)
+    for (name, _), array, peak in zip(named, arrays, peaks, strict=True):
+        _bounded(name, array, peak)
     lengths = [array.size for array in arrays]
     if len(set(lengths)) > 1:
         names = ", ".join(name for name, _ in named)
@@ -441,7 +459,7 @@ def _signals(*named: tuple[str, object], minimum: int, after: float = -math.inf)
         raise ValueError(
             f"t must be strictly increasing: t[{i + 1}] = {t[i + 1]} follows t[{i}] = {t[i]}"
         )
-    return arrays
+    return arrays, peaks
 
 
 # The system and its filtered signals ---------------------------------------------------------
@@ -3188,6 +3206,24 @@ WHITENESS_LEVEL = 5.0  # Q beyond its mean + LEVEL std when white: about 1e-4 fa
 CLEAN = 1e-5  # residuals below this fraction of the output's spread are noise-free data
 
 
+PRODUCT_BLOCK = 1 << 15  # samples per block of `_lagged_products`: two signals' blocks stay
+# in the processor's cache across the lags (a long record's are read from memory once, not
+# once a lag: half the time at 1e6 samples)
+
+
+def _lagged_products(x: np.ndarray, z: np.ndarray, lags) -> np.ndarray:
+    """x[lag:] @ z[:N - lag] for each lag (0 <= lag < N, x and z of one length N), by blocks
+    of PRODUCT_BLOCK samples (a record of one block: those very products)."""
+    size = x.size
+    out = np.zeros(len(lags))
+    for start in range(0, size, PRODUCT_BLOCK):
+        for i, lag in enumerate(lags):
+            stop = min(start + PRODUCT_BLOCK, size - lag)
+            if start < stop:
+                out[i] += x[start + lag : stop + lag] @ z[start:stop]
+    return out
+
+
 def _whiteness(r: np.ndarray) -> float:
     """Ljung-Box Q of the residuals over WHITENESS_LAGS lags (about chi-square when white)."""
     r = r - r.mean()
@@ -3195,7 +3231,7 @@ def _whiteness(r: np.ndarray) -> float:
     power = r @ r
     if lags < 1 or power == 0:
         return 0.0
-    rho = np.array([r[:-lag] @ r[lag:] for lag in range(1, lags + 1)]) / power
+    rho = _lagged_products(r, r, range(1, lags + 1)) / power
     return float(r.size * (r.size + 2) * np.sum(rho**2 / (r.size - np.arange(1, lags + 1))))
 
 
@@ -3838,7 +3874,7 @@ def _plain(value):
 
 
 def _compare(t, u, y, k, *, hold: str, known: dict) -> Comparison:
-    t, u, y = _in_range(_signals(("t", t), ("u", u), ("y", y), minimum=2), "")
+    t, u, y = _in_range(*_signal_peaks(("t", t), ("u", u), ("y", y), minimum=2), "")
     fitted, offset, state = _with_nuisances(t, u, y, k, hold=hold, offset=True,
                                             initial_state=True, known=known)  # fmt: skip
     residuals = y - fitted
@@ -3899,11 +3935,12 @@ class NoiseModel:
 
     @property
     def parameters(self) -> np.ndarray:
-        return np.r_[self.ar[1:], self.ma[1:]]
+        return np.concatenate((self.ar[1:], self.ma[1:]))
 
     def with_parameters(self, p: np.ndarray) -> "NoiseModel":
         na = self.orders[0]
-        return replace(self, ar=np.r_[1.0, p[:na]], ma=np.r_[1.0, p[na:]])
+        return NoiseModel(np.concatenate(([1.0], p[:na])), np.concatenate(([1.0], p[na:])),
+                          self.std, self.criterion)  # fmt: skip
 
     def whiten(self, x: np.ndarray, axis: int = 0) -> np.ndarray:
         """D(q)/C(q) x along the axis (the first by default), from rest (the prediction
@@ -3958,12 +3995,12 @@ def _within(c: np.ndarray, radius: float, strict: bool) -> bool | None:
     scaled polynomial below 1 in size); None where it cannot tell (a reflection coefficient
     of size 1, or over 1 with strict=False: np.roots then, an eigenvalue problem dearer
     than the filter on a short record)."""
-    a = c / radius ** np.arange(c.size)
-    for m in range(a.size - 1, 0, -1):
-        k = float(a[m])
+    a = (c / radius ** np.arange(c.size)).tolist()  # (a few numbers: Python's arithmetic)
+    for m in range(len(a) - 1, 0, -1):
+        k = a[m]
         if not abs(k) < 1:
             return False if strict and abs(k) > 1 else None
-        a = (a[:m] - k * a[m:0:-1]) / (1.0 - k * k)
+        a = [(a[i] - k * a[m - i]) / (1.0 - k * k) for i in range(m)]
     return True
 
 
@@ -3994,11 +4031,28 @@ def _lagged_gram(columns: list[tuple[np.ndarray, int]], start: int) -> np.ndarra
     return np.triu(G) + np.triu(G, 1).T
 
 
+def _rest_gram(v: np.ndarray, lags: int) -> np.ndarray:
+    """`_lagged_gram` of v at lags 0..lags from rest (start 0): one signal's products at
+    each lag difference are its autocorrelations, so the Gram matrix is their Toeplitz
+    matrix less the products that run past the record's end (a few rows, formed from its
+    last samples)."""
+    size = v.size
+    if size <= lags:
+        return _lagged_gram([(v, j) for j in range(lags + 1)], 0)
+    r = _lagged_products(v, v, range(lags + 1))
+    G = r[np.abs(np.arange(lags + 1)[:, None] - np.arange(lags + 1)[None, :])]
+    if lags:  # row i, column j: v[N + i - j] while that is within the record
+        tail = np.concatenate((v[size - lags :], np.zeros(lags + 1)))
+        rows = np.ascontiguousarray(np.lib.stride_tricks.sliding_window_view(tail, lags + 1)[:lags, ::-1])
+        G -= np.triu(rows.T @ rows)
+    return np.triu(G) + np.triu(G, 1).T
+
+
 def _lag_grams(v: np.ndarray, lags: int) -> np.ndarray:
     """The Gram matrices of the lag vectors [v_t .. v_(t-lags)] (v zero before the record):
     over t >= lags (the autoregressions' fits; zeros if v is shorter) and over every t (from
     rest: an autoregression's sum of squared prediction errors is d^T S d), stacked."""
-    rest = _lagged_gram([(v, j) for j in range(lags + 1)], 0)
+    rest = _rest_gram(v, lags)
     if v.size <= lags:
         return np.stack([np.zeros((lags + 1, lags + 1)), rest])
     where = np.arange(lags)[:, None] - np.arange(lags + 1)[None, :]  # the rows t < lags
@@ -4010,6 +4064,9 @@ def _regression(G: np.ndarray, columns: list[int]) -> np.ndarray:
     """Least squares of Gram column 0 on the given columns, from the Gram matrix G."""
     if not columns:
         return np.zeros(0)
+    if columns == list(range(columns[0], columns[-1] + 1)):  # (a slice: no copies)
+        return _solved(G[columns[0] : columns[-1] + 1, columns[0] : columns[-1] + 1],
+                       G[columns[0] : columns[-1] + 1, 0])  # fmt: skip
     return _solved(G[np.ix_(columns, columns)], G[columns, 0])
 
 
@@ -4043,12 +4100,12 @@ def _candidates(lags: np.ndarray, innovations, orders, cap: int) -> list[NoiseMo
     for na, nc in orders:
         if nc == 0:
             d = -_regression(lags, list(range(1, na + 1)))
-            found.append(NoiseModel(_stable_polynomial(np.r_[1.0, d]), np.ones(1)))
+            found.append(NoiseModel(_stable_polynomial(np.concatenate(([1.0], d))), np.ones(1)))
             continue
         columns = list(range(1, na + 1)) + list(range(cap + 1, cap + 1 + nc))
         p = _regression(innovations, columns)
-        ar = _stable_polynomial(np.r_[1.0, -p[:na]])
-        ma = _stable_polynomial(np.r_[1.0, p[na:]])
+        ar = _stable_polynomial(np.concatenate(([1.0], -p[:na])))
+        ma = _stable_polynomial(np.concatenate(([1.0], p[na:])))
         found.append(NoiseModel(ar, ma))
     return found
 
@@ -4078,7 +4135,7 @@ def _prediction_sums(v: np.ndarray, models: list) -> np.ndarray:
     finite = [i for i, (_, ma) in enumerate(models) if np.size(ma) == 1]
     if finite:
         lags = max(np.size(models[i][0]) for i in finite) - 1
-        S = _lagged_gram([(v, j) for j in range(lags + 1)], 0)
+        S = _rest_gram(v, lags)
         for i in finite:
             d = np.asarray(models[i][0], dtype=float)
             sums[i] = float(d @ S[: d.size, : d.size] @ d)
@@ -4106,7 +4163,7 @@ def _choose_noise(Theta, records, k, setting: str, settings, count: int) -> Nois
                           count, sum(order))
               for order, model in models.items()}  # fmt: skip
     if moving:
-        long_ar = np.r_[1.0, -_regression(lags, list(range(1, LONG_AR + 1)))]
+        long_ar = np.concatenate(([1.0], -_regression(lags, list(range(1, LONG_AR + 1)))))
         if setting == "auto" and min(scores.values()) <= _bic(float(long_ar @ rest @ long_ar), count, 2):
             moving = []
     if moving:
@@ -4450,7 +4507,7 @@ def _independence(eps: np.ndarray, u: np.ndarray) -> float:
     power = math.sqrt((e @ e) * (v @ v))
     if power == 0:
         return 0.0
-    r = np.array([e[lag:] @ v[: v.size - lag] for lag in range(lags)]) / power
+    r = _lagged_products(e, v, range(lags)) / power
     return float(eps.size * r @ inverse @ r)
 
 
@@ -4466,8 +4523,7 @@ def _input_correlations(u: np.ndarray, lags: int) -> tuple[np.ndarray, np.ndarra
     if found is None or found[1] != lags or not np.array_equal(found[0], u):
         v = u - u.mean()
         power = v @ v
-        rho = (np.array([v[lag:] @ v[: v.size - lag] for lag in range(lags)]) / power if power
-               else np.zeros(lags))  # fmt: skip
+        rho = _lagged_products(v, v, range(lags)) / power if power else np.zeros(lags)
         inverse = np.linalg.pinv(linalg.toeplitz(rho), rcond=1e-8)
         if len(_INPUTS) >= 8:
             _INPUTS.pop(next(iter(_INPUTS)))
@@ -4690,13 +4746,13 @@ def _records(t, u, y) -> list[tuple[np.ndarray, np.ndarray, np.ndarray]]:
     """One record (arrays t, u, y) or several (lists of arrays), each checked."""
     several = isinstance(t, list | tuple) and len(t) > 0 and np.ndim(t[0]) > 0
     if not several:
-        return [_in_range(_signals(("t", t), ("u", u), ("y", y), minimum=2), "")]
+        return [_in_range(*_signal_peaks(("t", t), ("u", u), ("y", y), minimum=2), "")]
     lists = [("t", t), ("u", u), ("y", y)]
     for name, value in lists:
         if not isinstance(value, list | tuple) or len(value) != len(t):
             raise ValueError(f"{name} must be a list of {len(t)} arrays, one per record, like t")
     return [
-        _in_range(_signals(*((f"{name}[{i}]", value[i]) for name, value in lists), minimum=2),
+        _in_range(*_signal_peaks(*((f"{name}[{i}]", value[i]) for name, value in lists), minimum=2),
                   f"[{i}]")  # fmt: skip
         for i in range(len(t))
     ]
@@ -4705,11 +4761,11 @@ def _records(t, u, y) -> list[tuple[np.ndarray, np.ndarray, np.ndarray]]:
 SIZE_LIMIT = 1e100  # |u| or |y| beyond it, or non-zero and all below its reciprocal: refused
 
 
-def _in_range(arrays, index: str) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def _in_range(arrays, peaks, index: str) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """The record, if the sums of products of its signals (the fit's moments, the residual
-    sums) stay within floating point's range; else a ValueError naming the signal."""
-    for name, w in zip(("u", "y"), arrays[1:], strict=True):
-        peak = float(np.abs(w).max())
+    sums) stay within floating point's range; else a ValueError naming the signal. peaks:
+    the signals' `_peak`s (`_signal_peaks`)."""
+    for name, peak in zip(("u", "y"), peaks[1:], strict=True):
         if peak > SIZE_LIMIT or 0 < peak < 1 / SIZE_LIMIT:
             raise ValueError(
                 f"{name}{index} reaches at most {peak:.3g} in magnitude: the fit's sums of "
@@ -5308,7 +5364,11 @@ def _profile(Theta, records, k, k_se, noise: NoiseModel, settings, bounds, varia
     model (see above); keep: the fit's, so that the records answer from what they kept;
     always: profile each unknown, quadratic or not."""
     p = len(UNKNOWNS)
-    point = np.r_[np.atleast_1d(np.asarray(k, dtype=float)), noise.parameters]
+    centre = np.atleast_1d(np.asarray(k, dtype=float))
+    halves = Z95 * np.reshape(k_se, -1).astype(float)
+    if not always and (halves <= Z95 * NARROW * np.abs(centre)).all():  # every one quadratic
+        return _Profile(np.stack([centre - halves, centre + halves], 1), ("wald",) * p, np.ones(p))
+    point = np.r_[centre, noise.parameters]
     rss, gram, _ = _total(records.prediction(Theta, k, noise.filters, settings, True, keep))
     box = np.reshape(bounds, (-1, 2))
     ci = np.empty((p, 2))
@@ -5816,11 +5876,17 @@ def _other_minima(Theta, records, settings, k, minima, rss, variance) -> list[st
 
 
 def _short_record(Theta, k, shapes) -> list[str]:
+    """A record under half the fitted model's slowest time constant."""
     a = np.trim_zeros((Theta @ _K(k))[n::-1], "f")
+    span = max(shape.span for shape in shapes)
+    low = np.trim_zeros(a, "b")  # (the trailing zeros are roots at 0, integrators)
+    with np.errstate(all="ignore"):  # Cauchy's bound on 1/|root|, above the slowest time
+        bound = 1.0 + float(np.max(np.abs(low[:-1] / low[-1]))) if low.size > 1 else 0.0
+    if span >= bound:  # (twice half of it: a margin for the roots' rounding) no root needed
+        return []
     sizes = np.abs(np.roots(a)) if a.size > 1 else np.zeros(0)
     sizes = sizes[sizes > 0]  # an integrator has no time constant
     slowest = 1.0 / sizes.min() if sizes.size else 0.0
-    span = max(shape.span for shape in shapes)
     if span < 0.5 * slowest:
         return [
             f"the record is short: it spans {span:.3g}, under half the slowest time constant "
@@ -5890,7 +5956,7 @@ def _exact_fit(Theta, records, shapes, k_ls, coefficients, total, found, *, c, k
     if not starts:  # the polynomial has no minimum: its verdict (`_finish` says why)
         return _finish(Theta, records, shapes, k_ls, coefficients, method="pem", iterations=0,
                        notes=notes, **common)  # fmt: skip
-    for label, start in starts + ([] if model is None else [("the model file's value", model)]):
+    for i, (label, start) in enumerate(starts + ([] if model is None else [("the model file's value", model)])):
         if ends and label == "the model file's value":
             break
         start = np.clip(start, box[:, 0], box[:, 1]) if not SCALAR else float(np.clip(start, *box[0]))
@@ -5898,6 +5964,8 @@ def _exact_fit(Theta, records, shapes, k_ls, coefficients, total, found, *, c, k
                                          keep, reached)  # fmt: skip
         if math.isfinite(rss):
             ends.append((rss, label, k, steps))
+            if i + 1 >= len(starts):  # (no other start's descent to end here)
+                continue
             gram = _total(records.prediction(Theta, k, WHITE.filters, settings, True, keep))[1]
             if gram is not None:
                 covariance = rss / count * np.linalg.pinv(gram)[: len(UNKNOWNS), : len(UNKNOWNS)]
