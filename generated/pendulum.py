@@ -1862,6 +1862,8 @@ def _descend(U: np.ndarray, x: np.ndarray, iterations: int = 80) -> tuple[np.nda
         polished = np.clip(x + np.where(minimum[:, None], step, 0.0), 0.0, 1.0)
         after = _monomials(polished) @ columns
         keep = np.abs(np.where(free, after[:, 1 : 1 + p], 0.0)).max(1) < np.abs(slope).max(1)
+        if not keep.any():  # nothing moves: the next round would find the same
+            break
         x = np.where(keep[:, None], polished, x)
         jets = np.where(keep[:, None], after, jets)
     return x, minimum
