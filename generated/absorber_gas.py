@@ -4030,6 +4030,20 @@ def _lagged_gram(columns: list[tuple[np.ndarray, int]], start: int) -> np.ndarra
     return np.triu(G) + np.triu(G, 1).T
 
 
+_LAG_INDICES: dict = {}  # lags -> the index arrays of `_lag_indices`, built once
+
+
+def _lag_indices(lags: int) -> tuple[np.ndarray, np.ndarray]:
+    """(|i - j| for i, j = 0..lags: a Toeplitz matrix's entries from its first column;
+    i + lags - j for i < lags: the lag rows at the record's ends from 2 lags + 1 samples)."""
+    found = _LAG_INDICES.get(lags)
+    if found is None:
+        i = np.arange(lags + 1)
+        found = _LAG_INDICES[lags] = (np.abs(i[:, None] - i[None, :]),
+                                      i[:lags, None] + lags - i[None, :])  # fmt: skip
+    return found
+
+
 def _rest_gram(v: np.ndarray, lags: int) -> np.ndarray:
     """`_lagged_gram` of v at lags 0..lags from rest (start 0): one signal's products at
     each lag difference are its autocorrelations, so the Gram matrix is their Toeplitz
@@ -4038,11 +4052,10 @@ def _rest_gram(v: np.ndarray, lags: int) -> np.ndarray:
     size = v.size
     if size <= lags:
         return _lagged_gram([(v, j) for j in range(lags + 1)], 0)
-    r = _lagged_products(v, v, range(lags + 1))
-    G = r[np.abs(np.arange(lags + 1)[:, None] - np.arange(lags + 1)[None, :])]
+    toeplitz, hankel = _lag_indices(lags)
+    G = _lagged_products(v, v, range(lags + 1))[toeplitz]
     if lags:  # row i, column j: v[N + i - j] while that is within the record
-        tail = np.concatenate((v[size - lags :], np.zeros(lags + 1)))
-        rows = np.ascontiguousarray(np.lib.stride_tricks.sliding_window_view(tail, lags + 1)[:lags, ::-1])
+        rows = np.concatenate((v[size - lags :], np.zeros(lags + 1)))[hankel]
         G -= np.triu(rows.T @ rows)
     return np.triu(G) + np.triu(G, 1).T
 
@@ -4054,8 +4067,7 @@ def _lag_grams(v: np.ndarray, lags: int) -> np.ndarray:
     rest = _rest_gram(v, lags)
     if v.size <= lags:
         return np.stack([np.zeros((lags + 1, lags + 1)), rest])
-    where = np.arange(lags)[:, None] - np.arange(lags + 1)[None, :]  # the rows t < lags
-    rows = np.where(where >= 0, v[np.maximum(where, 0)], 0.0)
+    rows = np.concatenate((np.zeros(lags), v[:lags]))[_lag_indices(lags)[1]]  # the rows t < lags
     return np.stack([rest - rows.T @ rows, rest])
 
 
@@ -4173,7 +4185,7 @@ def _choose_noise(Theta, records, k, setting: str, settings, count: int) -> Nois
         scores.update({order: _bic(rss, count, sum(order))
                        for order, rss in zip(moving, errors, strict=True)})  # fmt: skip
     best = min(scores, key=scores.get)
-    return replace(models[best], criterion=scores)
+    return NoiseModel(models[best].ar, models[best].ma, criterion=scores)
 
 
 # The exact fit: the minimiser of the sampled-data prediction error, from the paper's global one ---
