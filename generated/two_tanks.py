@@ -4455,7 +4455,9 @@ def _prediction(Theta, record, k, noise: NoiseModel, settings, jacobian: bool, k
             return _prediction(Theta, record, k, noise, settings, jacobian, keep, None, steps)
     if augmented and SCALAR:  # the new basis, where the record determines k well
         with np.errstate(all="ignore"):
-            se = math.sqrt(max(rss / t.size * np.linalg.pinv(gram)[0, 0], 0.0))
+            g = gram[0, 0]  # (one row, white noise: its pseudo-inverse in closed form)
+            inverse = (1.0 / g if g else 0.0) if gram.shape == (1, 1) else np.linalg.pinv(gram)[0, 0]
+            se = math.sqrt(max(rss / t.size * inverse, 0.0))
         basis = _Basis(float(k), forced, slopes) if se <= NARROW * abs(k) else None
     spread = y - y.mean()
     return _Prediction(
