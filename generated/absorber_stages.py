@@ -1483,14 +1483,6 @@ def _monomials(x: np.ndarray) -> np.ndarray:
     return terms
 
 
-def _jets(C: np.ndarray, x: np.ndarray):
-    """Value (n,), gradient (n, p) and Hessian (n, p, p) at the points x (n, p) of the
-    tensor whose `_jet_columns` are C."""
-    p = x.shape[1]
-    jets = _monomials(x) @ C
-    return jets[:, 0], jets[:, 1 : 1 + p], jets[:, 1 + p :].reshape(-1, p, p)
-
-
 def _lowest_curvature(H: np.ndarray) -> np.ndarray:
     """The smallest eigenvalue of each symmetric matrix H (..., p, p); for p = 2 in closed
     form (the determinant over the largest where the trace is positive: no cancellation),
