@@ -4600,6 +4600,8 @@ def _gauss_newton(Theta, records, k, noise: NoiseModel, bounds, settings, sample
     parts = records.prediction(Theta, k_, noise_.filters, settings, True, keep)
     rounding = RESIDUAL_ROUNDING**2 * sum(part.deviations for part in parts)
     damping, iterations = DAMPING, 0
+    ends = [(np.atleast_1d(end), end, cost, np.linalg.pinv(covariance))  # (pinv once a descent)
+            for end, cost, covariance in found]  # fmt: skip
     while iterations < PEM_ITERATIONS:
         scale = np.sqrt(np.maximum(np.diag(gram), 1e-300))
         newton = _solved(gram / np.outer(scale, scale), slope / scale)
@@ -4617,9 +4619,8 @@ def _gauss_newton(Theta, records, k, noise: NoiseModel, bounds, settings, sample
         damping = max(damping / 10.0, 1e-12)
         if moved.all() and undamped:  # (a damped step is short where the minimum is not)
             break
-        for end, cost, covariance in found:
-            away = (point[:count] - np.atleast_1d(end)) @ np.linalg.pinv(covariance) @ (
-                point[:count] - np.atleast_1d(end))
+        for at_end, end, cost, inverse in ends:
+            away = (point[:count] - at_end) @ inverse @ (point[:count] - at_end)
             if away < SAME_BASIN**2 and rss < cost + MARGIN * cost / samples:
                 return end, noise, cost, iterations
     return *unpack(point), rss, iterations
@@ -4996,8 +4997,10 @@ class Shape:
 
     @classmethod
     def of(cls, t: np.ndarray, u: np.ndarray) -> "Shape":
-        steps, counts = np.unique(np.diff(t), return_counts=True)
-        return cls(t.size, float(t[-1] - t[0]), steps, counts, int(np.count_nonzero(np.diff(u))),
+        # (np.diff's differences, without its copies; u's changes by comparison, which is
+        # its differences' being non-zero for the finite values a checked record holds)
+        steps, counts = np.unique(t[1:] - t[:-1], return_counts=True)
+        return cls(t.size, float(t[-1] - t[0]), steps, counts, int(np.count_nonzero(u[1:] != u[:-1])),
                    bool(u.any()))  # fmt: skip
 
 
