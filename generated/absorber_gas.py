@@ -3703,10 +3703,24 @@ def _step_maps(Phi: np.ndarray, Gamma: np.ndarray, m: int):
     responses = np.zeros((Gamma.shape[0], 2, m + 1, Phi.shape[0]))  # Phi^j Gamma[:, e], j < m
     responses[:, :, :m] = np.einsum("jab,seb->seja", powers[:m], Gamma)
     responses[np.abs(responses) < TINY] = 0.0
-    step, sample = np.arange(m + 1)[:, None], np.arange(m + 1)[None, :]
-    first = np.where(sample < step, step - 1 - sample, m)  # w_i's lag in Phi (m: none)
-    second = np.where((0 < sample) & (sample <= step), step - sample, m)  # w_(i+1)'s
+    first, second = _block_lags(m)
     return powers, responses[:, 0][:, first] + responses[:, 1][:, second]
+
+
+_LAGS: dict = {}  # m -> `_block_lags(m)`: the same few block lengths in every fit
+
+
+def _block_lags(m: int) -> tuple[np.ndarray, np.ndarray]:
+    """(first, second) (m + 1, m + 1): for the state l steps into a block (row l), the lag
+    in Phi of sample i's w_i (first) and w_(i+1) (second) drives (column i; m: none)."""
+    found = _LAGS.get(m)
+    if found is None:
+        step, sample = np.arange(m + 1)[:, None], np.arange(m + 1)[None, :]
+        first = np.where(sample < step, step - 1 - sample, m)
+        second = np.where((0 < sample) & (sample <= step), step - sample, m)
+        first.flags.writeable = second.flags.writeable = False  # (shared by every call)
+        found = _LAGS[m] = (first, second)
+    return found
 
 
 def _block_starts(Phi_m: np.ndarray, drives: np.ndarray, z0, blocks, modes, m: int, x: np.ndarray):
