@@ -5087,11 +5087,13 @@ class Records:
         (always without keep). The last few answers asked for are kept: the fit asks
         again at its estimate. A Jacobian near the last one computed in full is carried from
         it (`_prediction`), to second order."""
-        noise = NoiseModel(*(np.asarray(f, dtype=float) for f in filters))
-        key = (_settings_key(k, settings), noise.ar.tobytes(), noise.ma.tobytes(), jacobian, keep)
+        ar, ma = (np.asarray(f, dtype=float) for f in filters)
+        key = (_settings_key(k, settings), ar.tobytes(), ma.tobytes(), jacobian, keep)
+        noise = None  # (built when needed: most questions are asked again)
         if key in self._kept:  # (the least recently asked answer goes first)
             self._kept[key] = self._kept.pop(key)
         else:
+            noise = NoiseModel(ar, ma)
             if len(self._kept) >= KEPT_ANSWERS:
                 self._kept.pop(next(iter(self._kept)))
             same = key[0][1:]  # (a basis serves the same settings only)
@@ -5103,6 +5105,7 @@ class Records:
             self._bases = (same, [basis for _, basis in answers])
             self._kept[key] = [part for part, _ in answers]
         if figures:
+            noise = NoiseModel(ar, ma) if noise is None else noise
             self._kept[key] = [part.with_figures(record[1], noise)
                                for part, record in zip(self._kept[key], self.records, strict=True)]  # fmt: skip
         return self._kept[key]
