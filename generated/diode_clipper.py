@@ -2857,8 +2857,8 @@ def _blocked_gram(F, g, blocks, h: float, t, W, holds, beta: float) -> list[np.n
     """[sum over the intervals of e^(-beta (t_end - t_l)) v_l v_l^T] at regular sampling,
     v_l = each signal's [z_l; w_l; w_(l+1) - w_l] (the increment 0 for a held signal), z in
     the quasi-triangular F's coordinates; None where `_blocked` does not apply. From the
-    blocks of `_blocked` (m samples each: v_(bm+l) = P_b Map_l, P_b the block's first state
-    and samples, every signal's): the Gram matrix of the N/m vectors P_b, then the m maps,
+    blocks of `_blocked` (m samples each: v_(bm+l) a map of P_b, the block's first state and
+    samples, every signal's): the Gram matrix of the N/m vectors P_b, then the m maps,
     without forming the states within the blocks."""
     order, count = F.shape[0], len(holds)
     width, steps = order + 2, t.size - 1
@@ -2867,38 +2867,39 @@ def _blocked_gram(F, g, blocks, h: float, t, W, holds, beta: float) -> list[np.n
     if found is None:
         return None
     m, powers, K, P, _ = found
-    size, full = order + m + 1, steps // m
-    Map = np.zeros((m, count, size, count, width))  # v_(bm+l) = P_b Map_l
-    keep = np.ones((count, size), dtype=bool)  # the entries of P_b that some v uses
-    step = np.arange(m)
+    full, d = steps // m, count * width
+    # v_(bm+l) = p_b Map[:, l], p_b the entries of P_b that some v uses: each signal's first
+    # state, its samples but the last where held (it drives no state within the block), and
+    # one for all of a constant signal's samples (the unit step's): the Gram matrix of the
+    # p_b costs the square of their number
+    keep, rows, step = np.zeros((count, order + m + 1), dtype=bool), [], np.arange(m)
     for j, hold in enumerate(holds):
-        Map[:, j, :order, j, :order] = powers[:m].transpose(0, 2, 1)
-        Map[:, j, order:, j, :order] = K[j, :m]
-        Map[step, j, order + step, j, order] = 1.0
+        samples = np.zeros((m + 1, m, width))  # (sample, l, v's entry)
+        samples[:, :, :order] = K[j, :m].transpose(1, 0, 2)
+        samples[step, step, order] = 1.0
         if hold == "linear":
-            Map[step, j, order + step, j, order + 1] = -1.0
-            Map[step, j, order + step + 1, j, order + 1] = 1.0
-        else:  # (held: the last sample drives no state within the block)
-            keep[j, -1] = False
-    if beta:
-        Map *= np.exp(0.5 * beta * h * step)[:, None, None, None, None]
-    P = P.transpose(1, 0, 2)  # (blocks, signal, P_b's entries)
-    if beta:
-        P = P * np.exp(-0.5 * beta * (t[-1] - t[: steps : m]))[:, None, None]
-    Q = 0.0
-    if full < P.shape[0]:  # the last, shorter block (its samples past the end are 0)
-        tail = P[full].reshape(-1) @ Map[: steps - full * m].reshape(steps - full * m, -1, count * width)
-        Q = tail.T @ tail
-    # only the entries of P_b that some v uses, and one for all of a constant signal's samples
-    # (the unit step's): the Gram matrix costs the square of their number
-    for j in range(count):
+            samples[step, step, order + 1], samples[step + 1, step, order + 1] = -1.0, 1.0
         if W[j, 0] == W[j, -1] and (W[j] == W[j, 0]).all():
-            Map[:, j, order] = Map[:, j, order:].sum(1)
-            keep[j, order + 1 :] = False
-    Map = Map[:, keep].reshape(m, -1, count * width)
-    top = P[:full, keep]
-    gram = top.T @ top
-    Q = Q + Map.reshape(-1, count * width).T @ (gram @ Map).reshape(-1, count * width)
+            samples = samples.sum(0, keepdims=True)
+        elif hold != "linear":
+            samples = samples[:m]
+        keep[j, : order + len(samples)] = True
+        block = np.zeros((order + len(samples), m, d))
+        block[:order, :, j * width : j * width + order] = powers[:m].transpose(2, 0, 1)
+        block[order:, :, j * width : (j + 1) * width] = samples
+        rows.append(block)
+    Map = np.concatenate(rows)
+    P = P.transpose(1, 0, 2)[:, keep]  # (blocks, kept entries)
+    if beta:
+        Map *= np.exp(0.5 * beta * h * np.arange(m))[:, None]
+        P *= np.exp(-0.5 * beta * (t[-1] - t[: steps : m]))[:, None]
+    top = P[:full]
+    mapped = (top.T @ top) @ Map.reshape(len(Map), -1)
+    Q = Map.reshape(-1, d).T @ mapped.reshape(-1, d)
+    if full < P.shape[0]:  # the last, shorter block (its samples past the end are 0)
+        tail = P[full] @ Map[:, : steps - full * m].reshape(len(Map), -1)
+        tail = tail.reshape(steps - full * m, d)
+        Q += tail.T @ tail
     return [Q]
 
 
