@@ -3084,7 +3084,10 @@ def _check_time_scale(Theta: np.ndarray, k, step: float, span: float) -> None:
     constant of A(s, k) (k where the fit starts) under 1/TIME_SCALE sampling intervals (each
     mode dies out between samples) or over TIME_SCALE times the record (the record sees none
     move). The moments stay exact in any unit (they are formed in the filter's own
-    coordinates), so that this is said here rather than left to their overflow."""
+    coordinates), so that this is said here rather than left to their overflow. No k (no
+    k0, and the model file without values): nothing to look at, nothing said."""
+    if k is None:
+        return
     a = np.trim_zeros((Theta @ _K(k))[n::-1], "f")
     with np.errstate(all="ignore"):
         rates = np.abs(np.roots(a)) if a.size > 1 and np.isfinite(a).all() else np.zeros(0)

@@ -69,6 +69,17 @@ def test_times_far_too_long_are_said(dc_drive):
         assert any(text.startswith("the record is short: it spans 1e+11") for text in texts)
 
 
+def test_a_model_file_without_the_unknowns_value_fits_without_k0(dc_drive, monkeypatch):
+    """The time-scale check looks at the model where the fit starts; with neither k0 nor a
+    value in the model file there is no such point, and the fit goes on (it raised a
+    TypeError from K(None))."""
+    monkeypatch.setattr(dc_drive, "TRUE_VALUE", None)
+    t, u, y = prbs_record(dc_drive, 40.0, 40.0)
+    for C in ("auto", "(1+s)^5"):
+        found = dc_drive.fit(t, u, y, hold="zoh", C=C)
+        assert found.ok and abs(found.k - 10) < 4 * found.k_se
+
+
 def test_values_out_of_range_are_clear_errors(dc_drive, tmp_path, capsys):
     t, u, y = prbs_record(dc_drive, 10.0, 20.0)
     for arguments, message in [
