@@ -69,6 +69,16 @@ def test_a_measured_disturbance_is_fitted_not_left_in_the_noise():
     assert alone.k_se > 20 * found.k_se
 
 
+def test_times_in_another_unit_are_refused_as_for_one_signal():
+    """Times scaled by 1e12 (every mode dies out between samples) gave k = 1.1e13 with ok
+    True; the several-signal fit now says what the one-signal fit says."""
+    t, U, Y = record(motor(), 10.0, 2, seed=3)
+    module = motor().estimator()
+    refused = r"all under 1/1e\+06 of a sampling interval: every mode dies out between samples"
+    with pytest.raises(ValueError, match=refused + r": are the times in the model's unit"):
+        module.fit_signals(t * 1e12, U, Y, hold="zoh")
+
+
 def test_two_sensors_determine_what_neither_does_alone():
     model = mtt.load(SENSORS, output="Df:speed,Df:current")
     truth = [1.0, 1.0, 10.0, 0.1]
