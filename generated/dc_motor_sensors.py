@@ -1150,6 +1150,18 @@ def _K(k) -> np.ndarray:
     return np.prod(k ** _EXPONENTS, -1)
 
 
+def _mode_rates(Theta: np.ndarray, k) -> np.ndarray:
+    """|s| of A(s, k)'s roots but those at 0 (integrators): its modes' rates, the reciprocals
+    of their time constants (an infinite one left to the callers to judge); none where A's
+    coefficients are not finite."""
+    a = np.trim_zeros((Theta @ _K(k))[n::-1], "f")
+    if a.size < 2 or not np.isfinite(a).all():
+        return np.zeros(0)
+    with np.errstate(all="ignore"):
+        rates = np.abs(np.roots(a))
+    return rates[rates > 0]
+
+
 def _coefficients(name: str, Theta: np.ndarray, k) -> np.ndarray:
     """theta(k) = Theta @ K(k), or a ValueError when a coefficient leaves floating point."""
     with np.errstate(over="ignore", invalid="ignore"):
@@ -3088,10 +3100,8 @@ def _check_time_scale(Theta: np.ndarray, k, step: float, span: float) -> None:
     k0, and the model file without values): nothing to look at, nothing said."""
     if k is None:
         return
-    a = np.trim_zeros((Theta @ _K(k))[n::-1], "f")
-    with np.errstate(all="ignore"):
-        rates = np.abs(np.roots(a)) if a.size > 1 and np.isfinite(a).all() else np.zeros(0)
-    rates = rates[np.isfinite(rates) & (rates > 0)]
+    rates = _mode_rates(Theta, k)
+    rates = rates[np.isfinite(rates)]
     if not rates.size:
         return
     fastest, slowest = 1.0 / rates.max(), 1.0 / rates.min()
@@ -4813,8 +4823,7 @@ def _filter_for(Theta: np.ndarray, k, step: float, span: float) -> np.ndarray:
     lo, hi = SAMPLES_PER_FILTER * step, span / SAMPLES_PER_FILTER
     T = math.sqrt(lo * hi)
     if k is not None and np.all(np.isfinite(k)):
-        roots = np.roots(np.trim_zeros((Theta @ _K(k))[n::-1], "f"))
-        sizes = np.abs(roots[roots != 0])
+        sizes = _mode_rates(Theta, k)
         if sizes.size and np.isfinite(sizes).all():
             T = float(np.exp(-np.mean(np.log(sizes))))
     T = min(max(T, lo), hi) if lo <= hi else math.sqrt(lo * hi)
@@ -5915,8 +5924,7 @@ def _short_record(Theta, k, shapes) -> list[str]:
         bound = 1.0 + float(np.max(np.abs(low[:-1] / low[-1]))) if low.size > 1 else 0.0
     if span >= bound:  # (twice half of it: a margin for the roots' rounding) no root needed
         return []
-    sizes = np.abs(np.roots(a)) if a.size > 1 else np.zeros(0)
-    sizes = sizes[sizes > 0]  # an integrator has no time constant
+    sizes = _mode_rates(Theta, k)  # (an integrator has no time constant)
     slowest = 1.0 / sizes.min() if sizes.size else 0.0
     if span < 0.5 * slowest:
         return [
