@@ -497,12 +497,8 @@ def _responses(A, B, t: np.ndarray, W: np.ndarray, holds: tuple[str, ...], out=N
         return states
     states[:, 0] = 0.0 if start is None else start
 
-    def maps(values: np.ndarray):
-        found = {hold: _transitions(A, B, values, hold) for hold in set(holds)}
-        return found[holds[0]][0], np.stack([found[hold][1] for hold in holds], 1)
-
     if steps.index is None:
-        Phi, Gamma = maps(steps.values)
+        Phi, Gamma = _transitions(A, B, steps.values, holds)
     ends = np.stack([W[:, :-1], W[:, 1:]], -1)
     chunk = BLOCK if steps.index is None else 2048
     for lo in range(0, t.size - 1, chunk):
@@ -510,7 +506,7 @@ def _responses(A, B, t: np.ndarray, W: np.ndarray, holds: tuple[str, ...], out=N
         index = None
         if steps.index is not None:  # the maps of this chunk's steps only
             which, index = np.unique(steps.index[lo : hi - 1], return_inverse=True)
-            Phi, Gamma = maps(steps.values[which])
+            Phi, Gamma = _transitions(A, B, steps.values[which], holds)
         _propagate(Phi, Gamma, ends[:, lo : hi - 1], states[:, lo], index, out=states[:, lo:hi])
     return states
 
@@ -546,18 +542,18 @@ def _schur_rows(A, B, t, W, holds, start=None, steps=None, out=None, H=None):
     order = A.shape[0]
     g = inverse @ B
     z0 = inverse @ (np.zeros(order) if start is None else start)
-    maps = {hold: _transitions(F, g, steps.values, hold) for hold in set(holds)}
-    Gamma = np.stack([maps[hold][1][0] for hold in holds])  # (signals, [w_i, w_(i+1)], order)
+    Phi, Gamma = _transitions(F, g, steps.values, holds)
+    Phi, Gamma = Phi[0], Gamma[0]  # (one step; Gamma (signals, [w_i, w_(i+1)], order))
     if H is not None:
         out = np.empty((W.shape[0], H.shape[0], t.size))
         Hz = H if V is None else H @ V
-        if not _triangular(maps[holds[0]][0][0], Gamma, z0, blocks, out, Hz, W):
+        if not _triangular(Phi, Gamma, z0, blocks, out, Hz, W):
             return None
         return V, inverse, out
     out = np.empty((W.shape[0], order + 2, t.size)) if out is None else out
     out[:, order] = W
     out[:, order + 1, :-1], out[:, order + 1, -1] = W[:, 1:], W[:, -1]
-    if not _triangular(maps[holds[0]][0][0], Gamma, z0, blocks, out):
+    if not _triangular(Phi, Gamma, z0, blocks, out):
         return None
     return V, inverse, out[:, :order]
 
@@ -943,19 +939,10 @@ def _interpolation(h: np.ndarray, hold: str) -> np.ndarray:
     return H
 
 
-def _transitions(A, B, steps: np.ndarray, hold: str) -> tuple[np.ndarray, np.ndarray]:
-    """Phi (k, s, s) and Gamma (k, 2, s) for each step, exact for the hold: over one
-    interval, z_(i+1) = Phi z_i + Gamma^T [w_i, w_(i+1)]."""
-    order = A.shape[0]
-    E = linalg.expm(_drift(A, B) * steps[:, None, None])
-    Gamma = E[:, :order, order:] @ _interpolation(steps, hold)
-    return E[:, :order, :order], np.swapaxes(Gamma, 1, 2)
-
-
-def _hold_transitions(A, B, steps: np.ndarray, holds: tuple) -> tuple[np.ndarray, np.ndarray]:
-    """`_transitions` for signals of several holds, from one exponential per step: Phi (k,
-    s, s) and Gamma (k, signal, 2, s) (`_transitions` keeps its own layout of Gamma, in
-    which its callers' products are summed)."""
+def _transitions(A, B, steps: np.ndarray, holds: tuple) -> tuple[np.ndarray, np.ndarray]:
+    """Phi (k, s, s) and Gamma (k, signal, 2, s) for each step, exact for each signal's hold:
+    over one interval, z_(i+1) = Phi z_i + Gamma[:, j]^T [w_i, w_(i+1)]; one exponential
+    per step for all the holds."""
     order = A.shape[0]
     E = linalg.expm(_drift(A, B) * steps[:, None, None])
     found = {hold: np.swapaxes(E[:, :order, order:] @ _interpolation(steps, hold), 1, 2) for hold in set(holds)}
@@ -2884,7 +2871,7 @@ def _blocked_gram(F, g, blocks, h: float, t, W, holds, beta: float) -> list[np.n
     without forming the states within the blocks."""
     order, count = F.shape[0], len(holds)
     width, steps = order + 2, t.size - 1
-    Phi, Gamma = _hold_transitions(F, g, np.array([h]), holds)
+    Phi, Gamma = _transitions(F, g, np.array([h]), holds)
     found = _blocked(Phi[0], Gamma[0], np.zeros(order), blocks, W)
     if found is None:
         return None
