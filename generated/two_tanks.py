@@ -516,28 +516,34 @@ def _response_rows(A, B, t, W, holds, start=None, steps=None) -> np.ndarray | No
     return rows if V is None else V @ rows
 
 
-def _schur_rows(A, B, t, W, holds, start=None, steps=None, out=None, H=None):
+def _schur_rows(A, B, t, W, holds, start=None, steps=None, out=None, H=None, maps=None):
     """(V, V^-1, rows): the states of x' = A x + B w for each row w of W (interpolated per
     its hold), from rest (or `start`), at regular sampling, as rows (len(W), order, len(t))
     in A's balanced real Schur coordinates z = V^-1 x (`_schur_coordinates`; V None: A's
-    own), all the signals by one set of scalar recursions (`_triangular`): no companion
-    matrix is exponentiated, and the poles near z = 1 at fine sampling stay on the
-    diagonal. rows is a view of `out` (len(W), order + 2, len(t)) if given, the samples of
-    W and the next ones below the states (`_triangular`'s layout). Given the output rows H
+    own, V^-1 then the identity, or None with maps), all the signals by one set of scalar
+    recursions (`_triangular`): no companion matrix is exponentiated, and the poles near
+    z = 1 at fine sampling stay on the diagonal. rows is a view of `out` (len(W), order + 2,
+    len(t)) if given, the samples of W and the next ones below the states (`_triangular`'s
+    layout). Given the output rows H
     (outputs, order; in A's coordinates), rows are the outputs H x alone (len(W), outputs,
     len(t)), the states never stored. None where it does not apply (irregular sampling, or
-    an ill-conditioned complex pair)."""
+    an ill-conditioned complex pair). maps: (Phi, Gamma, blocks) of a quasi-triangular A
+    over the one step, for the holds (`_Realisation.step`), when the caller has them."""
     steps = _Steps.of(t) if steps is None and t.size > 1 else steps
     if steps is None or steps.index is not None or not A.shape[0] or not np.isfinite(A).all():
         return None
-    F, V, inverse, blocks = _schur_coordinates(A)
+    order = A.shape[0]
+    if maps is not None:
+        (Phi, Gamma, blocks), V, inverse = maps, None, None
+        z0 = np.zeros(order) if start is None else start
+    else:
+        F, V, inverse, blocks = _schur_coordinates(A)
+        if blocks is not None:
+            z0 = inverse @ (np.zeros(order) if start is None else start)
+            Phi, Gamma = _transitions(F, inverse @ B, steps.values, holds)
+            Phi, Gamma = Phi[0], Gamma[0]  # (one step; Gamma (signals, [w_i, w_(i+1)], order))
     if blocks is None:
         return None
-    order = A.shape[0]
-    g = inverse @ B
-    z0 = inverse @ (np.zeros(order) if start is None else start)
-    Phi, Gamma = _transitions(F, g, steps.values, holds)
-    Phi, Gamma = Phi[0], Gamma[0]  # (one step; Gamma (signals, [w_i, w_(i+1)], order))
     if H is not None:
         out = np.empty((W.shape[0], H.shape[0], t.size))
         Hz = H if V is None else H @ V
@@ -3369,10 +3375,32 @@ class _Realisation:
     dF: np.ndarray
     dh: np.ndarray
     dd: np.ndarray
+    _steps: dict = field(default_factory=dict, init=False, repr=False, compare=False)
 
     @property
     def order(self) -> int:
         return self.F.shape[0]
+
+    def step(self, h: float, hold: str | None, slopes: bool) -> tuple:
+        """(Phi, Gamma (1, 2, size); None without a hold, blocks) over one sampling interval
+        h, exact for the hold, of the augmented system (`_augmented_matrix`; slopes) or of
+        z' = F z + g u (its last diagonal block); blocks: the diagonal blocks (None where F
+        is not quasi-triangular). One matrix exponential per realisation and interval, the
+        augmented system's (`_transitions`, every hold's Gamma from it): the forced response,
+        its slopes and the free responses of an evaluation all take theirs from it."""
+        found = self._steps.get(h)
+        if found is None:
+            E = _transitions(_augmented_matrix(self), _augmented_input(self), np.array([h]), HOLDS)
+            found = self._steps[h] = (E[0][0], E[1][0], _diagonal_blocks(self.F))
+        Phi, Gamma, blocks = found
+        Gamma = None if hold is None else Gamma[HOLDS.index(hold)][None]
+        if slopes:
+            if blocks is not None:
+                blocks = [(j * self.order + start, size) for j in range(1 + len(self.dd)) for start, size in blocks]
+            return Phi, Gamma, blocks
+        tail = Phi.shape[0] - self.order
+        Gamma = None if Gamma is None else np.ascontiguousarray(Gamma[..., tail:])
+        return np.ascontiguousarray(Phi[tail:, tail:]), Gamma, blocks
 
 
 def _realise(Theta: np.ndarray, k) -> _Realisation | None:
@@ -3417,26 +3445,37 @@ def _state_rows(F, g, t, u, hold: str, start=None, steps=None) -> np.ndarray:
     return rows[0] if rows is not None else _responses(F, g, t, u, (hold,), start=start)[0].T
 
 
-def _output_rows(F, g, H, t, u, hold: str, steps=None) -> np.ndarray:
+def _output_rows(F, g, H, t, u, hold: str, steps=None, maps=None) -> np.ndarray:
     """H z (outputs, samples), a row per row of H, along z' = F z + g u from rest: at
-    regular sampling straight from the blocked recursion (`_schur_rows` with H), without
-    storing the states."""
-    found = _schur_rows(F, g, t, u[None], (hold,), steps=steps, H=H)
+    regular sampling straight from the blocked recursion (`_schur_rows` with H; maps:
+    F's, if the caller has them), without storing the states."""
+    found = _schur_rows(F, g, t, u[None], (hold,), steps=steps, H=H, maps=maps)
     if found is not None:
         return found[2][0]
     return H @ _responses(F, g, t, u, (hold,))[0].T
+
+
+def _regular_step(real: _Realisation, t, steps, hold: str | None, slopes: bool) -> tuple | None:
+    """`_Realisation.step` at a record's one sampling interval (steps: its `_Steps`, None:
+    found here); None at irregular sampling."""
+    steps = _Steps.of(t) if steps is None and t.size > 1 else steps
+    if steps is None or steps.index is not None:
+        return None
+    return real.step(float(steps.values[0]), hold, slopes)
 
 
 def _forced(real: _Realisation, t, u, hold: str, steps=None) -> np.ndarray:
     """The output from rest at the samples (exact for the hold)."""
     if real.order == 0:
         return real.d * u
-    return _output_rows(real.F, real.g, real.h[None], t, u, hold, steps)[0] + real.d * u
+    maps = _regular_step(real, t, steps, hold, False)
+    forced = _output_rows(real.F, real.g, real.h[None], t, u, hold, steps, maps)[0]
+    return forced + real.d * u if real.d else forced
 
 
 def _free(real: _Realisation, t: np.ndarray, steps: "_Steps") -> np.ndarray:
     """The free responses h Phi(t_i - t_0) e_j at the samples, a column per state j."""
-    return _free_rows(real.F, real.h[None], t, steps, real.order)[0]
+    return _free_responses(real, t, steps, False)[0].T
 
 
 def _powers(Phi: np.ndarray, count: int) -> np.ndarray:
@@ -3457,26 +3496,12 @@ def _powers(Phi: np.ndarray, count: int) -> np.ndarray:
 
 
 def _free_rows(F: np.ndarray, H: np.ndarray, t: np.ndarray, steps: "_Steps", columns: int):
-    """The last `columns` columns of each row of H Phi(t_i - t_0) at the samples, (rows,
-    samples, columns), Phi(t) = e^(F t); each row's (samples, columns) contiguous.
-
-    Regular sampling: R_i = H Phi^i by blocks of L samples, R_(qL + j) = R_(qL) Phi^j, the
-    block starts R_(qL) = H (Phi^L)^q (below TINY: 0, where a fast mode has died out), the
-    powers by doubling (`_powers`), each row's blocks one product with the stacked powers
-    Phi^0..Phi^(L-1)."""
-    size, rows = F.shape[0], H.shape[0]
+    """The last `columns` columns of each row of H Phi(t_i - t_0) at irregular samples,
+    (rows, samples, columns), Phi(t) = e^(F t), by one propagation of those columns of the
+    identity (`_propagate`, a matrix exponential per distinct interval); each row's
+    (samples, columns) contiguous. (Regular sampling: `_orbits`.)"""
+    size = F.shape[0]
     Phi = linalg.expm(F * steps.values[:, None, None])
-    if steps.index is None:
-        length = max(64, math.isqrt(t.size))
-        powers = _powers(Phi[0], length + 1)
-        count = -(-t.size // length)
-        starts = H @ _powers(powers[length], count)  # (count, rows, size)
-        starts[np.abs(starts) < TINY] = 0.0
-        stacked = powers[:length, :, size - columns :].transpose(1, 0, 2).reshape(size, -1)
-        out = np.empty((rows, count * length, columns))
-        for r in range(rows):
-            np.matmul(starts[:, r], stacked, out=out[r].reshape(count, length * columns))
-        return out[:, : t.size]
     quiet = np.zeros((columns, t.size - 1, 1))
     Gamma = np.zeros((len(Phi), columns, 1, size))
     states = _propagate(Phi, Gamma, quiet, np.eye(size)[size - columns :], steps.index)
@@ -3504,13 +3529,9 @@ def _augmented(real: _Realisation, t, u, hold: str, z0, steps=None) -> tuple[np.
     respect to the unknowns with z0 held (unknowns, order, samples). The augmented state
     is [dz/dk_1; ..; dz/dk_p; z], upper quasi-triangular as F is."""
     count, order = len(real.dd), real.order
-    size = order * (1 + count)
-    F = _augmented_matrix(real)
-    g = np.zeros(size)
-    g[count * order :] = real.g
-    start = np.zeros(size)
+    start = np.zeros(order * (1 + count))
     start[count * order :] = z0
-    rows = _state_rows(F, g, t, u, hold, start, steps)
+    rows = _state_rows(_augmented_matrix(real), _augmented_input(real), t, u, hold, start, steps)
     return rows[count * order :], rows[: count * order].reshape(count, order, t.size)
 
 
@@ -3518,11 +3539,19 @@ def _augmented_outputs(real: _Realisation, t, u, hold: str, steps=None) -> tuple
     """(forced, slopes): the output from rest (samples) and its derivatives with respect to
     the unknowns (unknowns, samples), from the augmented system's output rows
     (`_augmented_rows`) alone."""
-    count, order = len(real.dd), real.order
-    g = np.zeros(order * (1 + count))
-    g[count * order :] = real.g
-    rows = _output_rows(_augmented_matrix(real), g, _augmented_rows(real), t, u, hold, steps)
+    maps = _regular_step(real, t, steps, hold, True)
+    rows = _output_rows(_augmented_matrix(real), _augmented_input(real), _augmented_rows(real), t, u, hold,
+                        steps, maps)  # fmt: skip
+    if not (real.d or real.dd.any()):  # strictly proper at every k
+        return rows[0], rows[1:]
     return rows[0] + real.d * u, rows[1:] + np.outer(real.dd, u)
+
+
+def _augmented_input(real: _Realisation) -> np.ndarray:
+    """The augmented system's input map [0; ..; 0; g]."""
+    g = np.zeros(real.order * (1 + len(real.dd)))
+    g[len(real.dd) * real.order :] = real.g
+    return g
 
 
 def _augmented_rows(real: _Realisation) -> np.ndarray:
@@ -3554,8 +3583,8 @@ def _free_responses(real: _Realisation, t, steps: "_Steps", slopes: bool, out=No
     function of z0 that gives the derivatives of z0's free response with respect to the
     unknowns with z0 held (unknowns, samples): the augmented system's output rows
     [0, .., h, .., 0, dh_i] (h in the i-th place) along its free response from [0; z0],
-    whose last block is the free response itself (row [0, .., 0, h]): one matrix
-    exponential and one set of powers for both."""
+    whose last block is the free response itself (row [0, .., 0, h]): one set of powers
+    for both, of the realisation's one exponential (`_Realisation.step`)."""
     order = real.order
     F, H = (_augmented_matrix(real), _augmented_rows(real)) if slopes else (real.F, real.h[None])
     size = F.shape[0]
@@ -3565,7 +3594,7 @@ def _free_responses(real: _Realisation, t, steps: "_Steps", slopes: bool, out=No
         if out is not None:
             out[...] = found[:, 0]
         return rows, (lambda z0: np.tensordot(z0, found[:, 1:], 1)) if slopes else None
-    maps = _orbit_maps(linalg.expm(F * steps.values[0]), t.size)
+    maps = _orbit_maps(real.step(float(steps.values[0]), None, slopes)[0], t.size)
     rows = _orbits(maps, H[:1], np.eye(size)[:, size - order :], t.size,
                    None if out is None else out[:, None])[:, 0]  # fmt: skip
 
