@@ -3403,6 +3403,10 @@ class _Realisation:
         return np.ascontiguousarray(Phi[tail:, tail:]), Gamma, blocks
 
 
+def _no_selection(real: float, imaginary: float) -> None:
+    """LAPACK dgees' eigenvalue selection: none (the Schur form unsorted, as scipy's schur)."""
+
+
 def _realise(Theta: np.ndarray, k) -> _Realisation | None:
     """The realisation of G(s, k) and its sensitivities; None where A(s, k) loses its
     leading coefficient (a pole at infinity: no realisation of the model's order)."""
@@ -3428,8 +3432,12 @@ def _realise(Theta: np.ndarray, k) -> _Realisation | None:
     Ac[0] = -monic[n - 1 :: -1]
     cc = rest[n - 1 :: -1]
     balanced, _, _, scale, _ = linalg.lapack.dgebal(Ac, scale=1, permute=0)  # (matrix_balance's
-    # own call: its wrapper costs fifty times the balancing of so small a matrix)
-    F, Q = linalg.schur(balanced, output="real")
+    # and schur's own calls: their wrappers cost more than the work on so small a matrix)
+    if not np.isfinite(balanced).all():  # (monic overflowed: a leading coefficient near 0)
+        return None
+    F, _, _, _, Q, _, info = linalg.lapack.dgees(_no_selection, balanced)
+    if info:
+        raise np.linalg.LinAlgError(f"no real Schur form of A(s, k)'s companion matrix (LAPACK dgees: {info})")
     V = scale[:, None] * Q  # x = V z
     Vinv = Q.T / scale[None, :]
     dAc = np.zeros((len(dd), n, n))
@@ -3586,17 +3594,17 @@ def _free_responses(real: _Realisation, t, steps: "_Steps", slopes: bool, out=No
     whose last block is the free response itself (row [0, .., 0, h]): one set of powers
     for both, of the realisation's one exponential (`_Realisation.step`)."""
     order = real.order
-    F, H = (_augmented_matrix(real), _augmented_rows(real)) if slopes else (real.F, real.h[None])
-    size = F.shape[0]
+    H = _augmented_rows(real) if slopes else real.h[None]
+    size = H.shape[1]
     if steps.index is not None:
+        F = _augmented_matrix(real) if slopes else real.F
         found = _free_rows(F, H, t, steps, order).transpose(2, 0, 1)  # (state, row, sample)
         rows = found[:, 0] if out is None else out
         if out is not None:
             out[...] = found[:, 0]
         return rows, (lambda z0: np.tensordot(z0, found[:, 1:], 1)) if slopes else None
     maps = _orbit_maps(real.step(float(steps.values[0]), None, slopes)[0], t.size)
-    rows = _orbits(maps, H[:1], np.eye(size)[:, size - order :], t.size,
-                   None if out is None else out[:, None])[:, 0]  # fmt: skip
+    rows = _orbits(maps, H[:1], order, t.size, None if out is None else out[:, None])[:, 0]
 
     def along(z0: np.ndarray) -> np.ndarray:
         start = np.zeros((size, 1))
@@ -3614,24 +3622,26 @@ def _orbit_maps(Phi: np.ndarray, count: int) -> tuple:
     return length, powers, _powers(powers[length], -(-count // length))
 
 
-def _orbits(maps: tuple, H: np.ndarray, starts: np.ndarray, count: int, out=None) -> np.ndarray:
+def _orbits(maps: tuple, H: np.ndarray, starts, count: int, out=None) -> np.ndarray:
     """H Phi^i s for i = 0 .. count - 1 and each column s of starts, (columns, rows, count)
     (written into `out` if given, each row contiguous), from `_orbit_maps`: by blocks of L
     samples, H Phi^j (Phi^L)^q s at sample qL + j, the block starts vectors (below TINY:
-    0), each orbit's row one product with the stacked H Phi^j, written in place."""
+    0), each row one product of all the orbits' starts with the stacked H Phi^j, written in
+    place. starts: a matrix (size, columns), or a number c for the last c columns of the
+    identity (the block starts then read off (Phi^L)^q's columns)."""
     length, powers, blocks = maps
-    columns, rows = starts.shape[1], H.shape[0]
-    begins = blocks @ starts  # (blocks, size, columns)
+    size, rows = blocks.shape[1], H.shape[0]
+    begins = blocks[:, :, size - starts :] if isinstance(starts, int) else blocks @ starts
+    begins = begins.transpose(2, 0, 1).copy()  # (columns, blocks, size)
     begins[np.abs(begins) < TINY] = 0.0
     ends = (H @ powers[:length]).transpose(1, 2, 0).copy()  # (rows, size, L)
-    begins = begins.transpose(2, 0, 1).copy()  # (columns, blocks, size)
+    columns = begins.shape[0]
     out = np.empty((columns, rows, count)) if out is None else out
     full, rest = divmod(count, length)
-    for c in range(columns):
-        for r in range(rows):
-            np.matmul(begins[c, :full], ends[r], out=out[c, r, : full * length].reshape(full, length))
-            if rest:
-                out[c, r, full * length :] = begins[c, full] @ ends[r, :, :rest]
+    for r in range(rows):
+        np.matmul(begins[:, :full], ends[r], out=out[:, r, : full * length].reshape(columns, full, length))
+        if rest:
+            out[:, r, full * length :] = begins[:, full] @ ends[r, :, :rest]
     return out
 
 
