@@ -579,7 +579,8 @@ def _cascade_coordinates(A: np.ndarray):
     T = q / -A[-1, -1]  # (s + 1/T)^q = s^q + (q/T) s^(q-1) + ...
     powers = (1.0 / T) ** np.arange(q, 0, -1)  # (1/T)^(q-i), i = 0..q-1
     binomials = np.array([math.comb(q, i) for i in range(q)], dtype=float)
-    if not np.allclose(-A[-1], binomials * powers, rtol=1e-12, atol=0.0):
+    expected = binomials * powers
+    if not (np.abs(-A[-1] - expected) <= 1e-12 * np.abs(expected)).all():  # (np.allclose, atol 0)
         return None
     F = (np.eye(q, k=1) - np.eye(q)) / T
     V = np.array([[math.comb(j, l) * (-1.0) ** (j - l) * T**-j if l <= j else 0.0
@@ -2875,7 +2876,7 @@ def _blocked_gram(F, g, blocks, h: float, t, W, holds, beta: float) -> list[np.n
     # state, its samples but the last where held (it drives no state within the block), and
     # one for all of a constant signal's samples (the unit step's): the Gram matrix of the
     # p_b costs the square of their number
-    keep, rows, step = np.zeros((count, order + m + 1), dtype=bool), [], np.arange(m)
+    kept, rows, step = [], [], np.arange(m)
     for j, hold in enumerate(holds):
         samples = np.zeros((m + 1, m, width))  # (sample, l, v's entry)
         samples[:, :, :order] = K[j, :m].transpose(1, 0, 2)
@@ -2886,13 +2887,14 @@ def _blocked_gram(F, g, blocks, h: float, t, W, holds, beta: float) -> list[np.n
             samples = samples.sum(0, keepdims=True)
         elif hold != "linear":
             samples = samples[:m]
-        keep[j, : order + len(samples)] = True
+        kept.append(P[j, :, : order + len(samples)].T)
         block = np.zeros((order + len(samples), m, d))
         block[:order, :, j * width : j * width + order] = powers[:m].transpose(2, 0, 1)
         block[order:, :, j * width : (j + 1) * width] = samples
         rows.append(block)
     Map = np.concatenate(rows)
-    P = P.transpose(1, 0, 2)[:, keep]  # (blocks, kept entries)
+    columns = np.empty((sum(len(part) for part in kept), P.shape[1]))  # (BLAS takes P by columns)
+    P = np.concatenate(kept, out=columns).T  # (blocks, kept entries)
     if beta:
         Map *= np.exp(0.5 * beta * h * np.arange(m))[:, None]
         P *= np.exp(-0.5 * beta * (t[-1] - t[: steps : m]))[:, None]
@@ -3115,12 +3117,15 @@ def _record_moments(Theta, t, u, y, *, k, c, hold, offset, initial_state, beta, 
         holds, needs = holds + ("linear",), needs + (n,)
         c = _prefilter(Theta, k, c)
     if last >= first:
-        signals.append(np.ones_like(t))
+        signals.append(1.0)  # the unit step's
         holds, needs = holds + ("zoh",), needs + (last,)
-    M = _filtered_moments(c, t, np.array(signals), holds, needs, beta)
+    W = np.empty((len(signals), t.size))
+    for row, w in zip(W, signals, strict=True):
+        row[...] = w
+    M = _filtered_moments(c, t, W, holds, needs, beta)
     if not np.isfinite(M).all():
         raise ValueError(_overflow(t, c))
-    if last >= first:  # drop s^i 1/F for i < first (no offset), then project the rest out
+    if last >= first > 0:  # drop s^i 1/F for i < first (no offset), then project the rest out
         start = M.shape[0] - last - 1  # where the unit step's derivatives begin
         keep = np.r_[np.arange(start), start + np.arange(first, last + 1)]
         M = M[np.ix_(keep, keep)]
@@ -3690,12 +3695,13 @@ def _diagonal_blocks(A: np.ndarray) -> list[tuple[int, int]] | None:
     """(start, size) of the diagonal blocks of an upper quasi-triangular A (1 x 1 and 2 x 2),
     or None when A is not one."""
     size = A.shape[0]
-    if size == 0 or np.tril(A, -2).any():
+    rows = A.tolist()  # (a small matrix: Python's comparisons cost less than numpy's calls)
+    if size == 0 or any(row[j] != 0 for i, row in enumerate(rows) for j in range(i - 1)):
         return None
     blocks, i = [], 0
     while i < size:
-        if i + 1 < size and A[i + 1, i] != 0:
-            if i + 2 < size and A[i + 2, i + 1] != 0:
+        if i + 1 < size and rows[i + 1][i] != 0:
+            if i + 2 < size and rows[i + 2][i + 1] != 0:
                 return None
             blocks.append((i, 2))
             i += 2
@@ -3734,28 +3740,37 @@ def _step_maps(Phi: np.ndarray, Gamma: np.ndarray, m: int):
     a block's m + 1 samples of signal j (a row each) to its drive's part of the state l
     steps in, sum over i < l of Phi^(l-1-i) Gamma[j]^T [w_i, w_(i+1)]. Entries below TINY
     are 0 (a fast mode's powers die out into slow subnormal numbers)."""
+    order, count = Phi.shape[0], Gamma.shape[0]
     powers = _powers(Phi, m + 1)
     powers[np.abs(powers) < TINY] = 0.0
-    responses = np.zeros((Gamma.shape[0], 2, m + 1, Phi.shape[0]))  # Phi^j Gamma[:, e], j < m
-    responses[:, :, :m] = np.einsum("jab,seb->seja", powers[:m], Gamma)
+    responses = np.zeros((count, 2 * (m + 1) * order))  # Phi^j Gamma[:, e], j < m, flat by (e, j)
+    shaped = responses.reshape(count, 2, m + 1, order)
+    shaped[:, :, :m] = np.einsum("jab,seb->seja", powers[:m], Gamma)
     responses[np.abs(responses) < TINY] = 0.0
-    first, second = _block_lags(m)
-    return powers, responses[:, 0][:, first] + responses[:, 1][:, second]
+    first, second = _block_lags(m, order)
+    K = np.take(responses, first, axis=1)
+    K += np.take(responses, second, axis=1)
+    return powers, K.reshape(count, m + 1, m + 1, order)
 
 
-_LAGS: dict = {}  # m -> `_block_lags(m)`: the same few block lengths in every fit
+_LAGS: dict = {}  # (m, order) -> `_block_lags(m, order)`: the same few in every fit
 
 
-def _block_lags(m: int) -> tuple[np.ndarray, np.ndarray]:
-    """(first, second) (m + 1, m + 1): for the state l steps into a block (row l), the lag
-    in Phi of sample i's w_i (first) and w_(i+1) (second) drives (column i; m: none)."""
-    found = _LAGS.get(m)
+def _block_lags(m: int, order: int) -> tuple[np.ndarray, np.ndarray]:
+    """(first, second), flat indices ((m + 1) (m + 1) order) into `_step_maps`' responses
+    (2, m + 1, order): for the state l steps into a block (l), sample i's (i) entry a of its
+    w_i drive (first: Phi^(l-1-i) Gamma[0]) and of its w_(i+1) drive (second: Phi^(l-i)
+    Gamma[1]); the row m (zeros) where there is none."""
+    found = _LAGS.get((m, order))
     if found is None:
         step, sample = np.arange(m + 1)[:, None], np.arange(m + 1)[None, :]
         first = np.where(sample < step, step - 1 - sample, m)
-        second = np.where((0 < sample) & (sample <= step), step - sample, m)
-        first.flags.writeable = second.flags.writeable = False  # (shared by every call)
-        found = _LAGS[m] = (first, second)
+        second = np.where((0 < sample) & (sample <= step), step - sample, m) + m + 1
+        entry = np.arange(order)
+        found = tuple((lag[:, :, None] * order + entry).ravel() for lag in (first, second))
+        for array in found:
+            array.flags.writeable = False  # (shared by every call)
+        _LAGS[(m, order)] = found
     return found
 
 
@@ -3768,6 +3783,7 @@ def _block_starts(Phi_m: np.ndarray, drives: np.ndarray, z0, blocks, modes, m: i
     decays into subnormal numbers can stay there (the smallest one times 0.9 rounds to
     itself), and each step on them is a hundred times slower."""
     B, chunk = drives.shape[2], max(1, TRIANGULAR_CHUNK // m)
+    order = x.shape[1]
     x[:, :, 0] = z0
     for lo in range(0, B, chunk):
         hi = min(B, lo + chunk)
@@ -3775,15 +3791,21 @@ def _block_starts(Phi_m: np.ndarray, drives: np.ndarray, z0, blocks, modes, m: i
         state[np.abs(state) < TINY] = 0.0
         for start, size in blocks[::-1]:
             end = start + size
-            drive = drives[:, start:end, lo:hi] + Phi_m[start:end, end:] @ x[:, end:, lo:hi]
-            if size == 1:
+            if size == 1:  # (the start state enters the first drive, as lfilter's zi would)
                 a = Phi_m[start, start]
-                x[:, start, lo + 1 : hi + 1] = signal.lfilter(
-                    [1.0], [1.0, -a], drive[:, 0], zi=a * state[:, start, None])[0]  # fmt: skip
+                if end < order:
+                    drive = drives[:, start, lo:hi] + (Phi_m[start:end, end:] @ x[:, end:, lo:hi])[:, 0]
+                else:
+                    drive = drives[:, start, lo:hi] + 0.0
+                drive[:, 0] += a * state[:, start]
+                x[:, start, lo + 1 : hi + 1] = signal.lfilter([1.0], [1.0, -a], drive)
                 continue
+            drive = drives[:, start:end, lo:hi] + Phi_m[start:end, end:] @ x[:, end:, lo:hi]
             value, vector, row = modes[start]  # the second mode is the first's conjugate
             value = value**m
-            xi = signal.lfilter([1.0], [1.0, -value], row @ drive, zi=value * (state[:, start:end] @ row)[:, None])[0]
+            projected = row @ drive
+            projected[:, 0] += value * (state[:, start:end] @ row)
+            xi = signal.lfilter([1.0], [1.0, -value], projected)
             x[:, start:end, lo + 1 : hi + 1] = 2.0 * (vector * xi[:, None, :]).real
 
 
@@ -3803,11 +3825,12 @@ def _blocked(Phi: np.ndarray, Gamma: np.ndarray, z0: np.ndarray, blocks, samples
     m = TRIANGULAR_BLOCK if steps >= BLOCKED_FROM * TRIANGULAR_BLOCK else 1
     powers, K = _step_maps(Phi, Gamma, m)
     full, B = steps // m, -(-steps // m)  # blocks of m steps, and with the shorter last one
-    V = np.zeros((count, B, order + m + 1))
+    V = np.empty((count, B, order + m + 1))  # (each entry written below)
     V[:, :full, order:-1] = samples[:, : full * m].reshape(count, full, m)
     V[:, :full, -1] = samples[:, m : full * m + 1 : m]
     if full < B:
         V[:, full, order : order + steps + 1 - full * m] = samples[:, full * m :]
+        V[:, full, order + steps + 1 - full * m :] = 0.0
     x = states if m == 1 and states is not None else np.empty((count, order, B + 1))
     _block_starts(powers[m], np.swapaxes(V[:, :, order:] @ K[:, m], 1, 2), z0, blocks, modes, m, x)
     V[:, :, :order] = np.swapaxes(x[:, :, :B], 1, 2)
