@@ -160,3 +160,45 @@ def test_ok_is_false_when_the_diagnostics_contradict_the_answer(dc_drive):
     wrong = quiet(dc_drive, t, u, -y[::-1], hold="zoh", offset=False, initial_state=False,
                   bounds=(1.0, 100.0))  # fmt: skip
     assert not wrong.ok and wrong.fit_percent < 0
+
+
+def test_several_unknowns_step_on_by_a_chord(dc_motor, monkeypatch):
+    """Several unknowns: a step's trial point is evaluated without its Jacobian and the step
+    continued from there by the point's own Jacobian (`Records.chord`), the end evaluated in
+    full. The chord's J^T eps at the point itself is the full evaluation's, the same where
+    the records did not hold the point's Jacobian (found again); and the fit ends at the
+    minimum (Gauss-Newton's own step from there under SETTLED_COST) with two evaluations
+    in full, where Gauss-Newton's plain steps take three on this record."""
+    t = 0.01 * np.arange(10001)
+    u = prbs(t, 0.5, 4)
+    clean = held(t, u, [1.0, 10.0], dc_motor, np.zeros(2))
+    y = clean + 0.1 * np.std(clean) * np.random.default_rng(1).standard_normal(t.size)
+    settings = dict(hold="zoh", offset=True, initial_state=True, known={})
+    Theta, filters = dc_motor.theta(), dc_motor.WHITE.filters
+    records = dc_motor.Records([(t, u, y)])
+    k = np.array([1.01, 9.9])
+    full = records.prediction(Theta, k, filters, settings, True)[0]
+    chord = records.chord(Theta, k, filters, settings, (k, filters))[0]
+    assert chord.rss == full.rss and chord.gram is None
+    scale = np.abs(full.slope).max()
+    np.testing.assert_allclose(chord.slope, full.slope, rtol=1e-8, atol=1e-10 * scale)
+    kept = records.chord(Theta, k * 1.001, filters, settings, (k, filters))[0]
+    fresh = dc_motor.Records([(t, u, y)])  # (records held elsewhere: the origin's J found there)
+    again = fresh.chord(Theta, k * 1.001, filters, settings, (k, filters))[0]
+    assert again.rss == kept.rss and np.array_equal(again.slope, kept.slope)
+
+    counted = []
+    augmented = dc_motor._augmented_outputs
+    monkeypatch.setattr(
+        dc_motor, "_augmented_outputs", lambda *a: counted.append(1) or augmented(*a)
+    )
+    result = quiet(dc_motor, t, u, y, hold="zoh")
+    assert result.ok and result.noise.orders == (0, 0) and len(counted) == 2
+    at_end = dc_motor.Records([(t, u, y)]).prediction(Theta, result.k, filters, settings, True)[0]
+    decrement = at_end.slope @ np.linalg.solve(at_end.gram, at_end.slope) / (at_end.rss / t.size)
+    assert decrement < dc_motor.SETTLED_COST
+    monkeypatch.setattr(dc_motor, "CHORD_FROM", np.inf)  # plain Gauss-Newton steps
+    counted.clear()
+    plain = quiet(dc_motor, t, u, y, hold="zoh")
+    assert len(counted) == 3
+    np.testing.assert_allclose(result.k, plain.k, atol=0.01 * result.k_se.min())

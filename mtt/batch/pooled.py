@@ -139,7 +139,8 @@ class Pooled:
 
     moments, residual_sum, noise_sums = (_summed(name) for name in ("moments", "residual_sum",
                                                                      "noise_sums"))  # fmt: skip
-    validate, prediction = (_summed(name, parts=True) for name in ("validate", "prediction"))
+    validate, prediction, chord = (_summed(name, parts=True) for name in ("validate", "prediction",
+                                                                          "chord"))  # fmt: skip
 
 
 def refuse_estimate(module) -> None:

@@ -221,7 +221,8 @@ def pooled(name: str, source: str, held, columns, method: str, args):
     keeps them) or the list of its record specs, read here (a concurrent.futures worker
     keeps nothing between tasks). method "shapes" (args: offset, initial_state): the good
     records' positions and shapes, and the others' errors; "moments", "validate",
-    "residual_sum", "prediction" or "noise_sums": module.Records' answer over the chunk."""
+    "residual_sum", "prediction", "chord" or "noise_sums": module.Records' answer over the
+    chunk."""
     module = module_for(name, source)
     with warnings.catch_warnings(), one_thread(), _quiet(module):
         warnings.simplefilter("ignore")
