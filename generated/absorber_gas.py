@@ -3084,16 +3084,17 @@ def _overflow(t: np.ndarray, c: np.ndarray) -> str:
     )
 
 
-def _check_time_scale(Theta: np.ndarray, k, step: float, span: float) -> None:
+def _check_time_scale(Theta: np.ndarray, k, step: float, span: float, rates=None) -> None:
     """Refuse a record whose times are in another unit than the model's: every time
     constant of A(s, k) (k where the fit starts) under 1/TIME_SCALE sampling intervals (each
     mode dies out between samples) or over TIME_SCALE times the record (the record sees none
     move). The moments stay exact in any unit (they are formed in the filter's own
     coordinates), so that this is said here rather than left to their overflow. No k (no
-    k0, and the model file without values): nothing to look at, nothing said."""
+    k0, and the model file without values): nothing to look at, nothing said. rates: A(s,
+    k)'s `_mode_rates`, where the caller has them."""
     if k is None:
         return
-    rates = _mode_rates(Theta, k)
+    rates = _mode_rates(Theta, k) if rates is None else rates
     rates = rates[np.isfinite(rates)]
     if not rates.size:
         return
@@ -4942,13 +4943,14 @@ def _auto_filter(Theta: np.ndarray, k, records) -> np.ndarray:
     return _filter_for(Theta, k, step, min(float(t[-1] - t[0]) for t, _, _ in records))
 
 
-def _filter_for(Theta: np.ndarray, k, step: float, span: float) -> np.ndarray:
+def _filter_for(Theta: np.ndarray, k, step: float, span: float, rates=None) -> np.ndarray:
     """(1 + sT)^(n+1) with T the geometric mean of the time constants of A(s, k) (none
-    known: of the record's span and sampling interval), within [10 dt, span / 10]."""
+    known: of the record's span and sampling interval), within [10 dt, span / 10]. rates:
+    A(s, k)'s `_mode_rates`, where the caller has them."""
     lo, hi = SAMPLES_PER_FILTER * step, span / SAMPLES_PER_FILTER
     T = math.sqrt(lo * hi)
     if k is not None and np.all(np.isfinite(k)):
-        sizes = _mode_rates(Theta, k)
+        sizes = _mode_rates(Theta, k) if rates is None else rates
         if sizes.size and np.isfinite(sizes).all():
             T = float(np.exp(-np.mean(np.log(sizes))))
     T = min(max(T, lo), hi) if lo <= hi else math.sqrt(lo * hi)
@@ -5089,9 +5091,11 @@ def fit_records(records, *, method: str = "pem", noise: str = "auto", C="auto", 
     settings = dict(hold=hold, offset=offset, initial_state=initial_state, known=known)
     notes: list[str] = []
     interval, span = _median_step(shapes), min(shape.span for shape in shapes)
+    start = k0 if k0 is not None else _model_point()
+    rates = None if start is None else _mode_rates(Theta, start)  # (once, for both)
     if automatic:
-        c = _filter_for(Theta, k0 if k0 is not None else _model_point(), interval, span)
-    _check_time_scale(Theta, k0 if k0 is not None else _model_point(), interval, span)
+        c = _filter_for(Theta, start, interval, span, rates)
+    _check_time_scale(Theta, start, interval, span, rates)
     with np.errstate(all="ignore"):
         k, coefficients, total, found = _step(Theta, records, None, c, bounds, beta, settings)
         if automatic and method == "ls" and np.all(np.isfinite(k)):
