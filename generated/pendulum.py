@@ -2837,7 +2837,7 @@ def _derivatives(c: np.ndarray, needs: tuple[int, ...]) -> np.ndarray:
     return np.array(rows)
 
 
-def _filtered_moments(c, t, W, holds, needs, beta: float = 0.0) -> np.ndarray:
+def _filtered_moments(c, t, W, holds, needs, beta: float = 0.0, steps=None) -> np.ndarray:
     """int e^(-beta (t_end - tau)) D D^T dtau over the record, D = the filtered derivatives
     of the signals W (one per row, each interpolated per its hold; see `_derivatives`).
     Exact for the holds (see above): the weight is e^(-beta (t_end - t_l)) at an interval's
@@ -2848,12 +2848,13 @@ def _filtered_moments(c, t, W, holds, needs, beta: float = 0.0) -> np.ndarray:
     increment over the interval (the slope times h): there every state has the signal's
     own scale whatever the time unit, where the companion states s^i w / C differ by T^i.
     The intervals' Gram matrices (`_blocked_gram`, else `_interval_grams`) go through the
-    integral over the interval (`_interval_integral`) and only then to the derivatives."""
+    integral over the interval (`_interval_integral`) and only then to the derivatives.
+    steps: t's `_Steps`, where the caller has them."""
     order = c.size - 1
     A, B = _realisation(c)
     F, V, inverse, blocks = _schur_coordinates(A)
     g = inverse @ B
-    steps = _Steps.of(t)
+    steps = _Steps.of(t) if steps is None else steps
     grams = None
     if steps.index is None and blocks is not None:
         grams = _blocked_gram(F, g, blocks, steps.values[0], t, W, holds, beta)
@@ -3120,9 +3121,11 @@ def _check_time_scale(Theta: np.ndarray, k, step: float, span: float, rates=None
     )
 
 
-def _record_moments(Theta, t, u, y, *, k, c, hold, offset, initial_state, beta, known) -> Moments:
+def _record_moments(Theta, t, u, y, *, k, c, hold, offset, initial_state, beta, known,
+                    steps=None) -> Moments:  # fmt: skip
     """`moments` for checked arrays and a resolved filter: c is C(s) for least squares
-    (k None), else the extra factor of the prefilter (None for none)."""
+    (k None), else the extra factor of the prefilter (None for none); steps: t's `_Steps`,
+    where the caller has them."""
     first, last = _nuisance_needs(offset, initial_state)
     signals, holds, needs = [y, u], ("linear", hold), (n, m)
     if k is not None:
@@ -3135,7 +3138,7 @@ def _record_moments(Theta, t, u, y, *, k, c, hold, offset, initial_state, beta, 
     W = np.empty((len(signals), t.size))
     for row, w in zip(W, signals, strict=True):
         row[...] = w
-    M = _filtered_moments(c, t, W, holds, needs, beta)
+    M = _filtered_moments(c, t, W, holds, needs, beta, steps)
     if not np.isfinite(M).all():
         raise ValueError(_overflow(t, c))
     if last >= first > 0:  # drop s^i 1/F for i < first (no offset), then project the rest out
@@ -5213,14 +5216,20 @@ class Records:
         # the last point whose Jacobian was computed in full, from which nearby ones are carried
         self._steps: list | None = None  # each record's `_Steps`, found once
 
+    def _record_steps(self) -> list:
+        """Each record's `_Steps` (None for one sample), found once for every step of the fit."""
+        if self._steps is None:
+            self._steps = [_Steps.of(t) if t.size > 1 else None for t, _, _ in self.records]
+        return self._steps
+
     def shapes(self) -> list[Shape]:
         return [Shape.of(t, u) for t, u, _ in self.records]
 
     def moments(self, Theta, k, c, beta, settings) -> Moments:
         """The records' moments for a step of the fit (see `_record_moments`), summed."""
         return sum(
-            _record_moments(Theta, *record, k=k, c=c, beta=beta, **settings)
-            for record in self.records
+            _record_moments(Theta, *record, k=k, c=c, beta=beta, steps=steps, **settings)
+            for record, steps in zip(self.records, self._record_steps(), strict=True)
         )  # fmt: skip
 
     def validate(self, Theta, k, method, c, beta, settings, keep: bool = True) -> list:
@@ -5253,10 +5262,8 @@ class Records:
                 self._kept.pop(next(iter(self._kept)))
             same = key[0][1:]  # (a basis serves the same settings only)
             bases = self._bases[1] if self._bases[0] == same else [None] * len(self.records)
-            if self._steps is None:
-                self._steps = [_Steps.of(t) if t.size > 1 else None for t, _, _ in self.records]
             answers = [_prediction(Theta, record, k, noise, settings, jacobian, keep, basis, steps)
-                       for record, basis, steps in zip(self.records, bases, self._steps, strict=True)]  # fmt: skip
+                       for record, basis, steps in zip(self.records, bases, self._record_steps(), strict=True)]  # fmt: skip
             self._bases = (same, [basis for _, basis in answers])
             self._kept[key] = [part for part, _ in answers]
         if figures:
