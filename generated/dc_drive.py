@@ -4426,18 +4426,44 @@ def _lagged(x: np.ndarray, lags: int) -> np.ndarray:
 
 @dataclass(frozen=True)
 class _Chord:
-    """A record's Jacobian rows (whitened, the nuisances not projected) and its nuisances'
-    projection at the point of its last full evaluation, `at` (k then the noise
-    coefficients, as bytes): what a chord step from there (`_gauss_newton`, several
-    unknowns) multiplies a trial point's prediction errors by."""
+    """A record's Jacobian rows (whitened, the nuisances not projected), its nuisances'
+    projection and their values (the offset, the initial state in tf2ss's coordinates) at
+    the point of its last full evaluation, `at` (k then the noise coefficients, as bytes):
+    what a chord step from there (`_gauss_newton`, several unknowns) needs at a trial point
+    (`_chord_prediction`)."""
 
     at: bytes
     JT: np.ndarray
     projection: _Projection
+    offset: float
+    state: np.ndarray
 
     def slope(self, eps: np.ndarray) -> np.ndarray:
         """J^T eps with J this point's projected Jacobian (eps projected on its nuisances)."""
         return self.JT @ self.projection.fit_rows(eps[None])[1][0]
+
+
+def _chord_prediction(Theta, record, k, noise: NoiseModel, settings, chord: _Chord, steps=None):
+    """The record's prediction errors at k with its nuisances held at the chord's values
+    (one simulation from that initial state, no projection): their sum of squares, no
+    less than with the nuisances fitted at k, and in `slope` the chord's J^T eps
+    (`_Chord.slope`: eps projected on the chord's nuisances, so that to first order it is
+    the prediction errors' own with the nuisances fitted)."""
+    t, u, y = record
+    real = _realise(Theta, k)
+    if real is None or not _predictor_stable(real):
+        return _Prediction(math.inf, t.size, 0)
+    with np.errstate(all="ignore"):
+        output = real.d * u + chord.offset
+        if real.order:
+            steps = steps if steps is not None else _Steps.of(t)
+            start = np.linalg.solve(real.V, chord.state) if settings["initial_state"] else None
+            output += real.h @ _state_rows(real.F, real.g, t, u, settings["hold"], start, steps)
+        eps = noise.whiten(y - output)
+    rss = float(eps @ eps)
+    if not math.isfinite(rss):
+        return _Prediction(math.inf, t.size, 0)
+    return _Prediction(rss, t.size, 0, slope=chord.slope(eps))
 
 
 def _point_key(k, noise: NoiseModel) -> bytes:
@@ -4464,14 +4490,12 @@ def _record_prediction(Theta, record, k, noise: NoiseModel, settings, jacobian: 
 
 
 def _prediction(Theta, record, k, noise: NoiseModel, settings, jacobian: bool, keep: bool = False,
-                basis=None, steps=None, chord: bool = False) -> tuple[_Prediction, object]:  # fmt: skip
+                basis=None, steps=None) -> tuple[_Prediction, object]:  # fmt: skip
     """`_record_prediction`, and the record's basis for later steps: with `jacobian`, one
     unknown, the Jacobian by k is carried from `basis` (a `_Basis`: the record's outputs at
     a point near k) by `_updated_slopes` where that is accurate, else computed in full,
     which gives the new basis; several unknowns: a full evaluation gives the new basis, a
-    `_Chord`. With `chord` (and a `_Chord` basis: else rss alone), the sum of squares and
-    the basis' J^T eps at k in `slope` (`_Chord.slope`). The basis is returned as it is
-    when not replaced. With `keep` (the residuals kept) the whiteness and independence
+    `_Chord`. The basis is returned as it is when not replaced. With `keep` (the residuals kept) the whiteness and independence
     figures are left to `_Prediction.with_figures`: a fit needs them at its estimate alone.
     steps: the record's `_Steps` (None: found here)."""
     t, u, y = record
@@ -4504,9 +4528,7 @@ def _prediction(Theta, record, k, noise: NoiseModel, settings, jacobian: bool, k
     nu, eps = nu[0], eps[0]
     rss = float(eps @ eps)
     if not (jacobian or keep):
-        slope = basis.slope(eps) if chord and isinstance(basis, _Chord) else None
-        return _Prediction(rss, t.size, projection.rank, slope=slope,
-                           deviations=t.size * float(np.var(y))), basis  # fmt: skip
+        return _Prediction(rss, t.size, projection.rank, deviations=t.size * float(np.var(y))), basis
     value, z0 = _nuisance_values(nu, real, offset, initial_state)
     if not jacobian:
         fitted = forced + nu @ XT
@@ -4558,7 +4580,7 @@ def _prediction(Theta, record, k, noise: NoiseModel, settings, jacobian: bool, k
             se = math.sqrt(max(rss / t.size * inverse, 0.0))
         basis = _Basis(float(k), forced, slopes) if se <= NARROW * abs(k) else None
     elif not SCALAR:  # (the projection's rows are the whitened nuisances, kept as they are)
-        basis = _Chord(_point_key(k, noise), JT, projection)
+        basis = _Chord(_point_key(k, noise), JT, projection, value, real.V @ z0)
     spread = y - y.mean()
     return _Prediction(
         rss, t.size, projection.rank, gram, JT @ eps, free,
@@ -4659,10 +4681,11 @@ def _admissible(noise: NoiseModel) -> bool:
 
 
 def _damped_step(at, point: np.ndarray, rss: float, gram: np.ndarray, slope: np.ndarray,
-                 damping: float, box: np.ndarray, free: np.ndarray | None = None):
+                 damping: float, box: np.ndarray, free: np.ndarray | None = None,
+                 limit: float = 1e12):  # fmt: skip
     """One Levenberg-Marquardt step of the free entries of point (all when None; the
     unknowns first, clipped to box): the least damping from `damping` up, by factors of 10
-    below 1e12, whose trial `at` (point -> (rss, gram, slope); gram None in a chord's
+    below `limit`, whose trial `at` (point -> (rss, gram, slope); gram None in a chord's
     answer) finds no costlier than rss; (trial, at(trial), damping), or None where no
     damping does (a minimum, to rounding)."""
     free = np.ones(point.size, dtype=bool) if free is None else free
@@ -4670,7 +4693,7 @@ def _damped_step(at, point: np.ndarray, rss: float, gram: np.ndarray, slope: np.
     scale = np.sqrt(np.maximum(np.diag(G), 1e-300))
     G = G / np.outer(scale, scale)
     count = len(box)
-    while damping < 1e12:
+    while damping < limit:
         trial = point.copy()
         trial[free] -= _solved(G + damping * np.eye(G.shape[0]), g / scale) / scale
         trial[:count] = np.clip(trial[:count], box[:, 0], box[:, 1])
@@ -4689,8 +4712,8 @@ CHORD_FROM = 1e-2  # several unknowns: a step promising at least this many noise
 def _chord(at, point, rss, gram, trial, new, damping, box):
     """From a step's trial (new: look's answer there, a chord's), one chord step: the
     Gauss-Newton step with the point's Jacobian and the trial's errors. (end, at(end)),
-    the end no costlier than the point, else (trial, at(trial)); (trial, None) where
-    neither evaluates. (Further chords converge to where the trial's errors are orthogonal
+    the end no costlier than the point, else (trial, at(trial)) (the trial no costlier:
+    its cost with the nuisances held was not); (trial, None) where neither evaluates. (Further chords converge to where the trial's errors are orthogonal
     to the point's Jacobian, not to their own: measured, no nearer the minimum.)"""
     scale = np.sqrt(np.maximum(np.diag(gram), 1e-300))
     solver = gram / np.outer(scale, scale) + damping * np.eye(gram.shape[0])
@@ -4713,13 +4736,13 @@ def _gauss_newton(Theta, records, k, noise: NoiseModel, bounds, settings, sample
     variances) ends there, as it would.
 
     Several unknowns, a step promising more than CHORD_FROM noise variances: its trial
-    point is evaluated without a Jacobian (`Records.chord`) and the step continued from
-    there by the point's own Jacobian (`_chord`), the end evaluated in full. Measured on 12
+    point is simulated once, the nuisances held at the point's values (`Records.chord`),
+    and where that costs no more than the point, the step is continued from there by the
+    point's own Jacobian (`_chord`) and the end evaluated in full. Measured on 12
     of dc_motor's speed-bench records, Gauss-Newton's step from the polynomial minimiser
     (0.3-2.5 standard errors away) lands 0.004-0.28 standard errors short (the output
     bends along the step), and the next step costs a third evaluation in full; the chord
-    lands within 0.001-0.008 (under SETTLED_COST) for an evaluation without the
-    augmented system. One unknown: a step lands within 1e-4 of its length on the bench
+    lands within 0.001-0.008 (under SETTLED_COST) for one simulation of the model. One unknown: a step lands within 1e-4 of its length on the bench
     records, and the chord would cost more than it saves."""
     count = len(UNKNOWNS)
     box = np.reshape(bounds, (-1, 2))
@@ -4737,8 +4760,8 @@ def _gauss_newton(Theta, records, k, noise: NoiseModel, bounds, settings, sample
     chords = None if SCALAR else getattr(records, "chord", None)  # (not several signals')
 
     def look(p):
-        """The chord's answer at p: (rss, None, J^T eps with J that at `origin`, the step's
-        (k, noise))."""
+        """The chord's answer at p (`Records.chord`): (rss with the nuisances held, None,
+        J^T eps with J that at `origin`, the step's (k, noise))."""
         k_, noise_ = unpack(p)
         if not _admissible(noise_):
             return math.inf, None, None
@@ -4765,7 +4788,9 @@ def _gauss_newton(Theta, records, k, noise: NoiseModel, bounds, settings, sample
         iterations += 1
         chord = chords is not None and decrease > CHORD_FROM * max(rss, rounding) / samples
         origin = unpack(point)  # (look's)
-        taken = _damped_step(look if chord else at, point, rss, gram, slope, damping, box)
+        taken = _damped_step(look, point, rss, gram, slope, damping, box, limit=damping * 10) if chord else None
+        if taken is None:  # (where the chord's trial, its nuisances held, costs more: in full)
+            taken = _damped_step(at, point, rss, gram, slope, damping, box)
         if taken is None:
             break  # no step lowers the error: a minimum (to rounding)
         trial, new, damping = taken
@@ -5268,21 +5293,20 @@ class Records:
         return self._kept[key]
 
     def chord(self, Theta, k, filters, settings, origin) -> list:
-        """Each record's sum of squares at k with the noise model's filters and, in `slope`,
-        J^T eps there with J its Jacobian at `origin` ((k, filters); several unknowns: the
-        record's `_Chord`, kept from the last evaluation in full, else computed here: the
-        same answer wherever the records are held)."""
+        """Each record's `_chord_prediction` at k with the noise model's filters, from
+        `origin` ((k, filters); several unknowns: the record's `_Chord` there, kept from the
+        last evaluation in full, else found here: the same answer wherever the records are
+        held)."""
         ar, ma = (np.asarray(f, dtype=float) for f in filters)
         noise, start = NoiseModel(ar, ma), NoiseModel(*(np.asarray(f, dtype=float) for f in origin[1]))
         same, at = _settings_key(k, settings)[1:], _point_key(origin[0], start)
-        if self._steps is None:
-            self._steps = [_Steps.of(t) if t.size > 1 else None for t, _, _ in self.records]
+        record_steps = self._record_steps()
         if self._bases[0] != same or not all(isinstance(basis, _Chord) and basis.at == at
                                              for basis in self._bases[1]):  # fmt: skip
             self._bases = (same, [_prediction(Theta, record, origin[0], start, settings, True, False, None, steps)[1]
-                                  for record, steps in zip(self.records, self._steps, strict=True)])  # fmt: skip
-        return [_prediction(Theta, record, k, noise, settings, False, False, basis, steps, True)[0]
-                for record, basis, steps in zip(self.records, self._bases[1], self._steps, strict=True)]  # fmt: skip
+                                  for record, steps in zip(self.records, record_steps, strict=True)])  # fmt: skip
+        return [_chord_prediction(Theta, record, k, noise, settings, basis, steps)
+                for record, basis, steps in zip(self.records, self._bases[1], record_steps, strict=True)]  # fmt: skip
 
     def noise_sums(self, Theta, k, settings, request):
         """The sums over the records' output-error residuals at k that the choice of a
