@@ -3400,15 +3400,18 @@ class _Realisation:
         """(Phi, Gamma (1, 2, size); None without a hold, blocks) over one sampling interval
         h, exact for the hold, of the augmented system (`_augmented_matrix`; slopes) or of
         z' = F z + g u (its last diagonal block); blocks: the diagonal blocks (None where F
-        is not quasi-triangular). One matrix exponential per realisation and interval, the
-        augmented system's (`_transitions`, every hold's Gamma from it): the forced response,
-        its slopes and the free responses of an evaluation all take theirs from it."""
+        is not quasi-triangular). One matrix exponential per realisation and interval (and
+        hold), the augmented system's (`_transitions`): the forced response, its slopes and
+        the free responses of an evaluation all take theirs from it."""
         found = self._steps.get(h)
-        if found is None:
-            E = _transitions(_augmented_matrix(self), _augmented_input(self), np.array([h]), HOLDS)
-            found = self._steps[h] = (E[0][0], E[1][0], _diagonal_blocks(self.F))
-        Phi, Gamma, blocks = found
-        Gamma = None if hold is None else Gamma[HOLDS.index(hold)][None]
+        if found is None or (hold is not None and hold not in found[1]):
+            Phi, Gamma = _transitions(_augmented_matrix(self), _augmented_input(self), np.array([h]),
+                                      (hold or HOLDS[0],))  # fmt: skip
+            holds = {} if found is None else found[1]
+            holds[hold or HOLDS[0]] = Gamma
+            found = self._steps[h] = (Phi[0], holds, _diagonal_blocks(self.F) if found is None else found[2])
+        Phi, holds, blocks = found
+        Gamma = None if hold is None else holds[hold][0]
         if slopes:
             if blocks is not None:
                 blocks = [(j * self.order + start, size) for j in range(1 + len(self.dd)) for start, size in blocks]
