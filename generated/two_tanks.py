@@ -4789,8 +4789,10 @@ def _gauss_newton(Theta, records, k, noise: NoiseModel, bounds, settings, sample
             # by rounding alone, on noise-free data, where the steps would wander for ever)
         iterations += 1
         chord = chords is not None and decrease > CHORD_FROM * max(rss, rounding) / samples
-        origin = unpack(point)  # (look's)
-        taken = _damped_step(look, point, rss, gram, slope, damping, box, limit=damping * 10) if chord else None
+        taken = None
+        if chord:
+            origin = unpack(point)  # (look's)
+            taken = _damped_step(look, point, rss, gram, slope, damping, box, limit=damping * 10)
         if taken is None:  # (where the chord's trial, its nuisances held, costs more: in full)
             taken = _damped_step(at, point, rss, gram, slope, damping, box)
         if taken is None:
