@@ -1457,30 +1457,32 @@ def _jet_layout() -> tuple[np.ndarray, np.ndarray]:
 _JET_PLACES, _JET_FACTORS = _jet_layout()
 
 
-def _jet_columns(T: np.ndarray) -> np.ndarray:
-    """(prod(SHAPE), 1 + p + p^2): `_monomials(x) @` it are the value, the gradient and the
-    Hessian (flattened) at x of the flattened tensor T: one product for them all, at any
-    number of points."""
-    return (T[_JET_PLACES] * _JET_FACTORS).T
+def _jet_rows(T: np.ndarray) -> np.ndarray:
+    """(1 + p + p^2, prod(SHAPE)): `_at(x, rows)` are the value, the gradient and the Hessian
+    (flattened) at x of the flattened tensor T: one product for them all, at any number of
+    points."""
+    return T[_JET_PLACES] * _JET_FACTORS
 
 
-def _power_table(x: np.ndarray) -> np.ndarray:
-    """(..., p, max(SHAPE)): x_i^j, j = 0..max(SHAPE) - 1, for each coordinate."""
-    out = np.empty(x.shape + (max(SHAPE),))
-    out[..., 0] = 1.0
-    for j in range(1, out.shape[-1]):
-        np.multiply(out[..., j - 1], x, out=out[..., j])
-    return out
-
-
-def _monomials(x: np.ndarray) -> np.ndarray:
-    """The terms of a flattened tensor at the points x (..., p): (..., prod(SHAPE)), so that
-    `_monomials(x) @ T` is T there (the outer product of each coordinate's powers)."""
-    table = _power_table(x)
-    terms = table[..., 0, : SHAPE[0]]
+def _terms(x: np.ndarray) -> np.ndarray:
+    """The terms of a flattened tensor at the points x (..., p): (prod(SHAPE), points), the
+    points x's leading axes flattened, so that T @ it is T there. The outer product of each
+    coordinate's powers, built with the points along the last axis (numpy's inner loops
+    then run over the points, not over a few powers)."""
+    flat = x.reshape(-1, x.shape[-1]).T
+    table = np.empty((flat.shape[0], max(SHAPE), flat.shape[1]))  # x_i^j: (p, powers, points)
+    table[:, 0] = 1.0
+    for j in range(1, table.shape[1]):
+        np.multiply(table[:, j - 1], flat, out=table[:, j])
+    terms = table[0, : SHAPE[0]]
     for axis in range(1, len(SHAPE)):
-        terms = (terms[..., :, None] * table[..., axis, None, : SHAPE[axis]]).reshape(x.shape[:-1] + (-1,))
+        terms = (terms[:, None] * table[axis, None, : SHAPE[axis]]).reshape(-1, flat.shape[1])
     return terms
+
+
+def _at(x: np.ndarray, C: np.ndarray) -> np.ndarray:
+    """The flattened tensors C (rows, prod(SHAPE)) at each point x (..., p): (..., rows)."""
+    return (C @ _terms(x)).T.reshape(x.shape[:-1] + (-1,))
 
 
 def _lowest_curvature(H: np.ndarray) -> np.ndarray:
@@ -1650,6 +1652,10 @@ def _curved(own: np.ndarray, before: np.ndarray, reach) -> np.ndarray:
 # corner lower than the best starts a new descent. The search ends when no sub-box is left:
 # no point of the box is lower than the best minimum by more than SEARCH_TOLERANCE of J's
 # largest value there (`certified`). The grid's descents report the other local minima.
+# With two unknowns and J quadratic in one of them, J's least value and every local minimum
+# are among a few candidates instead (`_profile_candidates`, the one-unknown method on J's
+# profile): that least proves the best minimum found lowest, no branch and bound; and where
+# the candidates hold one local minimum, every descent would end there, so none is run.
 
 GRID_STARTS = 32  # at most this many starts of the descents from the grid (and any given)
 GRID_POINTS = 4096  # J evaluated on a grid of about this many points over the box
@@ -1657,7 +1663,6 @@ SEARCH_TOLERANCE = 1e-10  # of J's largest value on the box: lower by less is as
 MAX_BOXES = 4096  # sub-boxes kept at once: beyond, the search stops uncertified
 SAME_POINT = 1e-7  # minima closer than this (in the box's coordinates) are one
 _STEPS = 0.5 ** np.arange(20)  # the descents' trial step lengths
-_TRIALS = np.r_[0.0, _STEPS]  # with the point itself, evaluated alike
 
 
 @dataclass(frozen=True)
@@ -1797,48 +1802,32 @@ def _descent_steps(x: np.ndarray, gradient: np.ndarray, H: np.ndarray) -> np.nda
     return np.stack([d * g - b * h, a * h - b * g], 1) / -determinant[:, None]
 
 
-def _descend(U: np.ndarray, x: np.ndarray, iterations: int = 80) -> tuple[np.ndarray, np.ndarray]:
-    """Local minima of the polynomial U (flattened tensor, box coordinates) on [0, 1]^p from
-    the starts x (starts, unknowns): Newton steps on the coordinates not held by a bound
-    (the Hessian shifted where it is not positive definite), the longest of _STEPS that
-    lowers J by more than the rounding of its value, until no step does; then Newton on
-    the gradient polishes what values cannot resolve. Returns the distinct points reached
-    and whether each is a local minimum (the free Hessian positive definite, the projected
-    gradient within rounding). J's value, gradient and Hessian, and the sizes of the terms
-    of J and of its gradient (their rounding), are one product of the points' monomials
-    with `_jet_columns`, for every start and trial step at once; the trial taken gives the
-    next step's."""
-    x = np.clip(x, 0.0, 1.0)
+# With two unknowns and J quadratic in one (SHAPE 3: theta's columns at most linear in it, as a
+# product of two unknowns gives), J's least along that one with the other held is in closed
+# form, and where J's profile over the other can be least are the roots of three polynomials
+# (`_profile_candidates`): every local minimum and J's least value are among them.
+_PROFILED = SHAPE.index(3) if len(SHAPE) == 2 and 3 in SHAPE else None
+_OTHER = 1 - _PROFILED if _PROFILED is not None else None
+
+
+def _jet_table(U: np.ndarray) -> np.ndarray:
+    """The rows `_at` takes for J's value, gradient and Hessian, then the sizes of the terms
+    of J and of its gradient (their rounding), of the polynomial U."""
+    return np.concatenate([_jet_rows(U), _jet_rows(np.abs(U))[: 1 + len(SHAPE)]])
+
+
+def _settle(rows: np.ndarray, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The distinct points among x (the ends of descents, or candidates), polished by
+    Newton's method on the gradient (what values no longer resolve), and whether each is a
+    local minimum: the free Hessian positive definite, the projected gradient within
+    rounding. rows: `_jet_table`."""
     p = x.shape[1]
-    hessian, size = 1 + p + p * p, 2 + p + p * p  # columns: J, gradient, Hessian, |J|, its gradient
-    columns = np.concatenate([_jet_columns(U), _jet_columns(np.abs(U))[:, : 1 + p]], 1)
-    here = x.copy()  # the moving starts' points (rows of x at `active`), and J's jets there
-    jets = _monomials(here) @ columns
-    active = np.arange(x.shape[0])
-    for _ in range(iterations):
-        step = _descent_steps(here, jets[:, 1 : 1 + p], jets[:, 1 + p : hessian].reshape(-1, p, p))
-        trials = np.minimum(np.maximum(here[:, None] + _TRIALS[None, :, None] * step[:, None], 0.0), 1.0)
-        at = _monomials(trials) @ columns  # the first: here (step 0)
-        values = at[..., 0]
-        better = values[:, 1:] < values[:, :1] - ROUNDING * at[:, :1, hessian]
-        taken = 1 + np.argmax(better, 1)
-        rows = np.arange(here.shape[0])
-        chosen = np.where(better[rows, taken - 1][:, None], trials[rows, taken], here)
-        moved = np.abs(chosen - here).max(1) > 4 * EPS  # only where a step lowered J
-        if moved.all():
-            here, jets = chosen, at[rows, taken]
-            continue
-        x[active[~moved]] = chosen[~moved]
-        here, jets, active = chosen[moved], at[rows[moved], taken[moved]], active[moved]
-        if active.size == 0:
-            break
-    else:
-        x[active] = here
+    hessian, size = 1 + p + p * p, 2 + p + p * p
     order = np.lexsort(x.T[::-1])
     x = x[order]
     x = x[np.r_[True, np.abs(np.diff(x, axis=0)).max(1) > 1e-6]]  # starts that met
     minimum = np.zeros(x.shape[0], dtype=bool)
-    jets = _monomials(x) @ columns
+    jets = _at(x, rows)
     for _ in range(3):  # polish: values no longer tell, the gradient still does
         gradient, H = jets[:, 1 : 1 + p], jets[:, 1 + p : hessian].reshape(-1, p, p)
         free, H = _free_hessian(x, gradient, H, strict=False)
@@ -1847,13 +1836,48 @@ def _descend(U: np.ndarray, x: np.ndarray, iterations: int = 80) -> tuple[np.nda
         safe = np.where(minimum[:, None, None], H, np.eye(p))
         step = -_solve(safe, slope)
         polished = np.clip(x + np.where(minimum[:, None], step, 0.0), 0.0, 1.0)
-        after = _monomials(polished) @ columns
+        after = _at(polished, rows)
         keep = np.abs(np.where(free, after[:, 1 : 1 + p], 0.0)).max(1) < np.abs(slope).max(1)
         if not keep.any():  # nothing moves: the next round would find the same
             break
         x = np.where(keep[:, None], polished, x)
         jets = np.where(keep[:, None], after, jets)
     return x, minimum
+
+
+def _descend(U: np.ndarray, x: np.ndarray, iterations: int = 80) -> tuple[np.ndarray, np.ndarray]:
+    """Local minima of the polynomial U (flattened tensor, box coordinates) on [0, 1]^p from
+    the starts x (starts, unknowns): Newton steps on the coordinates not held by a bound
+    (the Hessian shifted where it is not positive definite), the longest of _STEPS that
+    lowers J by more than the rounding of its value, until no step does; then `_settle`.
+    J's value, gradient and Hessian, and the sizes of the terms of J and of its gradient
+    (their rounding), are one product (`_jet_table`, `_at`) for every start and trial
+    step at once; the trial taken gives the next step's."""
+    x = np.clip(x, 0.0, 1.0)
+    p = x.shape[1]
+    hessian = 1 + p + p * p  # rows: J, gradient, Hessian, |J|, its gradient
+    rows = _jet_table(U)
+    jets = _at(x, rows)
+    here = x.copy()  # the moving starts' points (rows of x at `active`), and J's jets there
+    active = np.arange(x.shape[0])
+    for _ in range(iterations):
+        step = _descent_steps(here, jets[:, 1 : 1 + p], jets[:, 1 + p : hessian].reshape(-1, p, p))
+        trials = np.minimum(np.maximum(here[:, None] + _STEPS[None, :, None] * step[:, None], 0.0), 1.0)
+        at = _at(trials, rows)
+        better = at[..., 0] < jets[:, :1] - ROUNDING * jets[:, hessian, None]
+        taken = np.argmax(better, 1)
+        which = np.arange(here.shape[0])
+        chosen = np.where(better[which, taken][:, None], trials[which, taken], here)
+        moved = np.abs(chosen - here).max(1) > 4 * EPS  # only where a step lowered J
+        if not moved.all():
+            x[active[~moved]] = chosen[~moved]
+            chosen, taken, which, active = chosen[moved], taken[moved], which[moved], active[moved]
+            if active.size == 0:
+                break
+        here, jets = chosen, at[which, taken]
+    else:
+        x[active] = here
+    return _settle(rows, x)
 
 
 def _basins(U: np.ndarray, points: np.ndarray) -> np.ndarray:
@@ -1901,29 +1925,81 @@ def _grid_minima(U: np.ndarray) -> np.ndarray:
     return _GRID[where[np.argsort(values[where], kind="stable")[:GRID_STARTS]]]
 
 
+def _profile_candidates(U: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """With two unknowns, J quadratic in one (_PROFILED, x_e; the other r): points of [0, 1]^2
+    (a row each) and J there, among them every local minimum of J on the box and a point
+    of its least value. With J = a x_e^2 + b x_e + c (a, b, c polynomials in r), at a
+    local minimum r is 0 or 1 or J's slope along r vanishes, and J is least along x_e:
+    at x_e = 0 (then c' = 0), at x_e = 1 ((a + b + c)' = 0), or inside, where 2 a x_e + b =
+    0 and so (times 4 a^2) a' b^2 - 2 a b b' + 4 a^2 c' = 0 (a = 0 gives b = 0 and the
+    same). So r is 0, 1 or a real root of one of these three polynomials (the companion
+    matrices' eigenvalues, polished: the one-unknown method of `_global_minimisers`), and
+    x_e is 0, 1 or the vertex -b / 2a (a > 0). Where one of them vanishes throughout, J is
+    least along a whole curve (its profile flat), which ends at r = 0 or 1 or at a root of
+    another (the profile's slope is continuous there): the least value is among the
+    candidates still."""
+    c, b, a = np.moveaxis(U.reshape(SHAPE), _PROFILED, 0)  # ascending in r
+
+    def slope(P: np.ndarray) -> np.ndarray:
+        return P[1:] * np.arange(1, P.size)
+
+    vertex = np.convolve(slope(a), np.convolve(b, b)) - 2.0 * np.convolve(a, np.convolve(b, slope(b)))
+    vertex = vertex + 4.0 * np.convolve(np.convolve(a, a), slope(c))
+    D = np.zeros((3, vertex.size))
+    D[0], D[1, : c.size - 1], D[2, : c.size - 1] = vertex, slope(c), slope(a + b + c)
+    roots = _polish(D, _companion_roots(D).real)
+    r = np.clip(np.r_[roots[np.isfinite(roots)], 0.0, 1.0], 0.0, 1.0)
+    A, B, C = _value(np.stack([a, b, c])[:, None, :], r)
+    convex = A > 0.0
+    x = np.stack([np.zeros(r.size), np.ones(r.size),
+                  np.where(convex, np.clip(-0.5 * B / np.where(convex, A, 1.0), 0.0, 1.0), 0.0)])  # fmt: skip
+    points = np.empty((x.size, 2))
+    points[:, _PROFILED], points[:, _OTHER] = x.ravel(), np.tile(r, 3)
+    return points, (C + x * (B + A * x)).ravel()
+
+
 def _search(T: np.ndarray, centre, box: np.ndarray, starts=()) -> _Minima:
     """The local minima within `box` (unknowns, 2) of the polynomial whose flattened Taylor
     tensor about `centre` is T, the lowest proved lowest (see above). `starts`: points to
-    descend from besides the grid (an estimate at hand)."""
+    descend from besides the grid (an estimate at hand; none is needed where the profile's
+    candidates hold one local minimum)."""
     p = box.shape[0]
     lo, width = box[:, 0], box[:, 1] - box[:, 0]
     U = _on_box(T, lo - centre, width)
     B = _bernstein(U)
     tolerance = SEARCH_TOLERANCE * max(float(np.abs(B).max()), np.finfo(float).tiny)
-    x = _grid_minima(U)
-    extra = np.reshape(np.asarray(starts, dtype=float), (-1, p))
-    x = np.concatenate([x, (extra - lo) / width])
     points, values = np.zeros((0, p)), np.zeros(0)
 
-    def add(x: np.ndarray) -> None:
+    def keep(found: np.ndarray) -> None:
         nonlocal points, values
-        x, minimum = _descend(U, x)
-        for point in x[minimum]:
+        for point in found:
             if not (np.abs(points - point).max(1) <= SAME_POINT).any():
                 points = np.concatenate([points, point[None]])
                 values = np.append(values, _evaluate(U, point))
 
-    add(x)
+    def add(x: np.ndarray) -> None:
+        x, minimum = _descend(U, x)
+        keep(x[minimum])
+
+    least = -np.inf  # J's least over the box where known (the profile's candidates)
+
+    def proved() -> bool:  # no point of the box lower than the best minimum found
+        return values.size > 0 and least >= values.min() - tolerance
+
+    if _PROFILED is not None:  # J's least, and its local minima, among the profile's candidates
+        candidates, candidate_values = _profile_candidates(U)
+        least = candidate_values.min()
+        found, minimum = _settle(_jet_table(U), candidates)
+        if minimum.sum() == 1:  # one local minimum: where every descent would end
+            keep(found[minimum])
+    if not proved():
+        points, values = np.zeros((0, p)), np.zeros(0)
+        x = _grid_minima(U)
+        extra = np.reshape(np.asarray(starts, dtype=float), (-1, p))
+        add(np.concatenate([x, (extra - lo) / width]))
+    if proved():
+        order = np.argsort(values, kind="stable")
+        return _Minima(lo + points[order] * width, values[order], True)
     basins = _basins(U, points) if points.size else np.zeros((0, 2, p))
     boxes, corners = B.reshape(1, -1), np.zeros((1, p))  # Bernstein coefficients, lower corners
     side_length = 1.0

@@ -135,6 +135,43 @@ def test_the_search_finds_every_minimum_and_the_lowest_as_a_dense_grid_does(dc_m
     assert len(found.points) == 1 and np.all(found.points[0] > 0.5)
 
 
+def test_the_profile_candidates_hold_every_local_minimum_and_the_least_value(dc_motor):
+    """J is quadratic in each of dc_motor's unknowns: its local minima and least value over
+    the box come from the profile's candidates (`_profile_candidates`), checked against a
+    dense grid and against descents from the grid's local minima on random polynomials and
+    on degenerate ones (a valley of minima, J linear or constant along the profiled
+    unknown); the search certifies from them."""
+    rng = np.random.default_rng(18)
+    line = np.linspace(0.0, 1.0, 301)
+    grid = np.stack(np.meshgrid(line, line, indexing="ij"), -1)
+    box = np.array([[0.0, 1.0], [0.0, 1.0]])
+    valley = np.zeros((3, 3))
+    valley[0, 0], valley[1, 1], valley[2, 2] = 0.0625, -0.5, 1.0  # (x y - 1/4)^2
+    linear = rng.standard_normal((3, 3))
+    linear[:, 2] = 0.0  # no y^2: J linear in y
+    flat = np.zeros((3, 3))
+    flat[0, 0], flat[2, 0], flat[1, 0] = 1.0, 1.0, -1.0  # J = x^2 - x + 1 whatever y
+    tensors = [rng.standard_normal(9) * 10.0 ** rng.uniform(-3, 3, 9) for _ in range(20)]
+    for _ in range(60):  # costs: sums of squares of bilinear forms, each 0 somewhere near the box
+        forms = rng.standard_normal((3, 2, 2))  # form[i, j]: the coefficient of x^i y^j
+        x, y = rng.uniform(-0.2, 1.2, (2, 3))
+        forms[:, 0, 0] = -(forms[:, 1, 0] * x + forms[:, 0, 1] * y + forms[:, 1, 1] * x * y)
+        tensors.append(sum(signal.convolve2d(form, form) for form in forms).ravel())
+    tensors += [valley.ravel(), linear.ravel(), flat.ravel(), flat.T.ravel()]
+    for U in tensors:
+        points, values = dc_motor._profile_candidates(U)
+        scale = np.abs(U).sum()
+        assert np.all((points >= 0.0) & (points <= 1.0))
+        np.testing.assert_allclose(values, dc_motor._evaluate(U, points), atol=1e-14 * scale)
+        assert values.min() <= dc_motor._evaluate(U, grid).min() + 1e-13 * scale  # no point lower
+        found = dc_motor._search(U, np.zeros(2), box)
+        assert found.certified and found.values[0] <= values.min() + 1e-10 * scale
+        ends, minimum = dc_motor._descend(U, dc_motor._grid_minima(U))
+        for end in ends[minimum]:  # every minimum a descent reaches is among the search's
+            assert np.abs(found.points - end).max(1).min() < 1e-6
+    assert dc_motor._profile_candidates(valley.ravel())[1].min() == pytest.approx(0.0, abs=1e-15)
+
+
 def test_the_search_agrees_with_the_exact_univariate_minimiser(absorber, noisy_absorber):
     """The same search (its code serves any number of unknowns) on the absorber's cost, whose
     two minima the companion-matrix roots give exactly."""
