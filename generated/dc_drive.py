@@ -4359,16 +4359,7 @@ def _choose_noise(Theta, records, k, setting: str, settings, count: int) -> Nois
 # fit better), and the lowest end is the estimate: global through the polynomial, exact
 # through the prediction error.
 
-PEM_ITERATIONS = 60  # Gauss-Newton steps at most from each start
-PEM_CONVERGED = 1e-10  # steps below this, relative: converged
-SETTLED_COST = 1e-4  # a Gauss-Newton step that would lower the cost by less than this many
-# noise variances (moving k by a hundredth of its standard error; least_squares' ftol = 1e-8
-# of the cost on 2e4 samples) is not taken: converged
-RESIDUAL_ROUNDING = 1e-10  # residuals below this share of the output's spread (RMS) are
-# rounding (noise-free data): a step that would gain only a millionth of it is not taken
-DAMPING = 1e-4  # the first Levenberg-Marquardt damping, relative to J^T J's diagonal
 GRAM_CONDITION = 1e8  # the nuisances' scaled Gram matrix factorised directly below this
-SAME_BASIN = 3.0  # a descent this many standard errors from a minimum found ends there
 LEFT_IN_SPAN = 1e-4  # `_Projection.gram_rows` by its one product where the nuisances leave
 # at least this share of each row's sum of squares
 SYRK_FROM = 1 << 16  # samples from which `_Projection` forms X^T X by syrk (five columns,
@@ -4745,6 +4736,24 @@ def _input_correlations(u: np.ndarray, lags: int) -> tuple[np.ndarray, np.ndarra
             _INPUTS.pop(next(iter(_INPUTS)))
         found = _INPUTS[id(u)] = (u.copy(), lags, v, inverse)
     return found[2], found[3]
+
+
+# The exact fit's descent: Levenberg-Marquardt steps of the prediction error from a start --------
+
+# Gauss-Newton steps with the analytic Jacobian of `_prediction`, damped until the cost
+# falls; with several unknowns a long step is continued by a chord (`_chord`). What ends a
+# descent: a step that would lower the cost by a negligible amount (SETTLED_COST), no step
+# that lowers it, or a minimum already found (SAME_BASIN).
+
+PEM_ITERATIONS = 60  # Gauss-Newton steps at most from each start
+PEM_CONVERGED = 1e-10  # steps below this, relative: converged
+SETTLED_COST = 1e-4  # a Gauss-Newton step that would lower the cost by less than this many
+# noise variances (moving k by a hundredth of its standard error; least_squares' ftol = 1e-8
+# of the cost on 2e4 samples) is not taken: converged
+RESIDUAL_ROUNDING = 1e-10  # residuals below this share of the output's spread (RMS) are
+# rounding (noise-free data): a step that would gain only a millionth of it is not taken
+DAMPING = 1e-4  # the first Levenberg-Marquardt damping, relative to J^T J's diagonal
+SAME_BASIN = 3.0  # a descent this many standard errors from a minimum found ends there
 
 
 def _total(parts: list[_Prediction]) -> tuple[float, np.ndarray | None, np.ndarray | None]:
