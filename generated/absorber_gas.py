@@ -522,11 +522,11 @@ def _schur_rows(A, B, t, W, holds, start=None, steps=None, out=None, H=None, map
     recursions (`_triangular`): no companion matrix is exponentiated, and the poles near
     z = 1 at fine sampling stay on the diagonal. rows is a view of `out` (len(W), order + 2,
     len(t)) if given, the samples of W and the next ones below the states (`_triangular`'s
-    layout). Given the output rows H
-    (outputs, order; in A's coordinates), rows are the outputs H x alone (len(W), outputs,
-    len(t)), the states never stored. None where it does not apply (irregular sampling, or
-    an ill-conditioned complex pair). maps: (Phi, Gamma, blocks) of a quasi-triangular A
-    over the one step, for the holds (`_Realisation.step`), when the caller has them."""
+    layout). Given the output rows H (outputs, order; in A's coordinates), rows are the
+    outputs H x alone (len(W), outputs, len(t)), the states never stored. None where it
+    does not apply (irregular sampling, or an ill-conditioned complex pair). maps: (Phi,
+    Gamma, blocks) of a quasi-triangular A over the one step, for the holds
+    (`_Realisation.step`), when the caller has them."""
     steps = _Steps.of(t) if steps is None and t.size > 1 else steps
     if steps is None or steps.index is not None or not A.shape[0] or not np.isfinite(A).all():
         return None
@@ -3214,8 +3214,8 @@ def _record_moments(Theta, t, u, y, *, k, c, hold, offset, initial_state, beta, 
         keep = np.r_[np.arange(start), start + np.arange(first, last + 1)]
         M = M[np.ix_(keep, keep)]
     p = n + m + 2
-    M = _project_out(M, M.shape[0] - max(last - first + 1, 0))
     nuisances = max(last - first + 1, 0)
+    M = _project_out(M, M.shape[0] - nuisances)
     if k is None:
         return Moments(M, None, None, None, t.size, nuisances)
     Z = np.r_[p + np.arange(n + 1), n + 1 + np.arange(m + 1)]
@@ -4798,8 +4798,9 @@ def _chord(at, point, rss, gram, trial, new, damping, box):
     """From a step's trial (new: look's answer there, a chord's), one chord step: the
     Gauss-Newton step with the point's Jacobian and the trial's errors. (end, at(end)),
     the end no costlier than the point, else (trial, at(trial)) (the trial no costlier:
-    its cost with the nuisances held was not); (trial, None) where neither evaluates. (Further chords converge to where the trial's errors are orthogonal
-    to the point's Jacobian, not to their own: measured, no nearer the minimum.)"""
+    its cost with the nuisances held was not); (trial, None) where neither evaluates.
+    (Further chords converge to where the trial's errors are orthogonal to the point's
+    Jacobian, not to their own: measured, no nearer the minimum.)"""
     scale = np.sqrt(np.maximum(np.diag(gram), 1e-300))
     solver = gram / np.outer(scale, scale) + damping * np.eye(gram.shape[0])
     end = trial - _solved(solver, new[2] / scale) / scale
@@ -4827,8 +4828,9 @@ def _gauss_newton(Theta, records, k, noise: NoiseModel, bounds, settings, sample
     of dc_motor's speed-bench records, Gauss-Newton's step from the polynomial minimiser
     (0.3-2.5 standard errors away) lands 0.004-0.28 standard errors short (the output
     bends along the step), and the next step costs a third evaluation in full; the chord
-    lands within 0.001-0.008 (under SETTLED_COST) for one simulation of the model. One unknown: a step lands within 1e-4 of its length on the bench
-    records, and the chord would cost more than it saves."""
+    lands within 0.001-0.008 (under SETTLED_COST) for one simulation of the model. One
+    unknown: a step lands within 1e-4 of its length on the bench records, and the chord
+    would cost more than it saves."""
     count = len(UNKNOWNS)
     box = np.reshape(bounds, (-1, 2))
     point = np.r_[np.atleast_1d(np.asarray(k, dtype=float)), noise.parameters]
