@@ -93,6 +93,26 @@ def test_median_interval_over_records_is_exact(dc_drive):
         assert dc_drive._median_step(shapes) == expected
 
 
+def test_shape_intervals_match_np_unique(dc_drive):
+    """Shape.of counts the intervals' bit patterns where they span few (regular records, by
+    counting) and sorts them otherwise: np.unique's values and counts either way."""
+    rng = np.random.default_rng(5)
+    counted = 0
+    for trial in range(400):
+        size, dt = int(rng.integers(2, 5000)), 10 ** rng.uniform(-4, 1)
+        start = [0.0, rng.uniform(-100, 100)][trial % 2]
+        t = [start + dt * np.arange(size), np.linspace(start, start + dt * size, size),
+             start + np.cumsum(dt * rng.uniform(0.5, 1.5, size))][trial % 3]  # fmt: skip
+        steps = t[1:] - t[:-1]
+        bits = steps.view(np.int64)
+        counted += bool(bits.max() - bits.min() < steps.size)
+        shape = dc_drive.Shape.of(t, np.zeros_like(t))
+        values, counts = np.unique(steps, return_counts=True)
+        assert np.array_equal(shape.steps.view(np.int64), values.view(np.int64))
+        assert np.array_equal(shape.counts, counts) and shape.counts.dtype == counts.dtype
+    assert 50 < counted < 350  # (both ways taken)
+
+
 def test_no_records_is_an_error(dc_drive):
     with pytest.raises(ValueError, match="no records to fit"):
         dc_drive.fit_records(dc_drive.Records([]))
