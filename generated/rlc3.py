@@ -591,7 +591,11 @@ def _cascade_coordinates(A: np.ndarray):
     F = (np.eye(q, k=1) - np.eye(q)) / T
     V = np.array([[math.comb(j, l) * (-1.0) ** (j - l) * T**-j if l <= j else 0.0
                    for l in range(q)] for j in range(q)])  # fmt: skip
-    return F, V, linalg.solve_triangular(V, np.eye(q), lower=True), [(i, 1) for i in range(q)]
+    inverse, info = linalg.lapack.dtrtrs(V.T, np.eye(q), lower=0, trans=1)  # (solve_triangular's
+    # own call, V^T upper: its wrapper costs more than the work on so small a matrix)
+    if info:  # (a diagonal entry T^-j underflowed to 0: what solve_triangular raises)
+        raise np.linalg.LinAlgError(f"singular matrix: resolution failed at diagonal {info - 1}")
+    return F, V, inverse, [(i, 1) for i in range(q)]
 
 
 def simulate(t, u, k, *, hold: str = "linear", **known: float) -> np.ndarray:
@@ -3450,7 +3454,8 @@ def _ls_influence(Theta, t, u, y, k, c, hold, first, last, w) -> np.ndarray:
 @dataclass(frozen=True)
 class _Realisation:
     """G(s, k) as z' = F z + g u, y = h z + d u, with V mapping z to tf2ss's coordinates
-    (x = V z); dF, dh, dd: the derivatives with respect to each unknown (first axis)."""
+    (x = V z); dF, dh, dd: the derivatives with respect to each unknown (first axis); blocks:
+    F's diagonal blocks (`_diagonal_blocks`: None where F is not quasi-triangular)."""
 
     F: np.ndarray
     g: np.ndarray
@@ -3460,6 +3465,7 @@ class _Realisation:
     dF: np.ndarray
     dh: np.ndarray
     dd: np.ndarray
+    blocks: list | None
     _steps: dict = field(default_factory=dict, init=False, repr=False, compare=False)
 
     @property
@@ -3479,8 +3485,9 @@ class _Realisation:
                                       (hold or HOLDS[0],))  # fmt: skip
             holds = {} if found is None else found[1]
             holds[hold or HOLDS[0]] = Gamma
-            found = self._steps[h] = (Phi[0], holds, _diagonal_blocks(self.F) if found is None else found[2])
-        Phi, holds, blocks = found
+            found = self._steps[h] = (Phi[0], holds)
+        Phi, holds = found
+        blocks = self.blocks
         Gamma = None if hold is None else holds[hold][0]
         if slopes:
             if blocks is not None:
@@ -3515,7 +3522,7 @@ def _realise(Theta: np.ndarray, k) -> _Realisation | None:
     if n == 0:
         empty = np.zeros((0, 0))
         return _Realisation(empty, np.zeros(0), np.zeros(0), float(d), empty,
-                            np.zeros((len(dd), 0, 0)), np.zeros((len(dd), 0)), dd)  # fmt: skip
+                            np.zeros((len(dd), 0, 0)), np.zeros((len(dd), 0)), dd, None)  # fmt: skip
     Ac = np.eye(n, k=-1)
     Ac[0] = -monic[n - 1 :: -1]
     cc = rest[n - 1 :: -1]
@@ -3531,7 +3538,7 @@ def _realise(Theta: np.ndarray, k) -> _Realisation | None:
     dAc = np.zeros((len(dd), n, n))
     dAc[:, 0] = -dmonic[:, n - 1 :: -1]
     return _Realisation(F, Vinv[:, 0], cc @ V, float(d), V, Vinv @ dAc @ V,
-                        drest[:, n - 1 :: -1] @ V, dd)  # fmt: skip
+                        drest[:, n - 1 :: -1] @ V, dd, _diagonal_blocks(F))  # fmt: skip
 
 
 def _state_rows(F, g, t, u, hold: str, start=None, steps=None) -> np.ndarray:
@@ -4359,6 +4366,7 @@ def _choose_noise(Theta, records, k, setting: str, settings, count: int) -> Nois
 # through the prediction error.
 
 GRAM_CONDITION = 1e8  # the nuisances' scaled Gram matrix factorised directly below this
+CLEAR_CONDITION = 100.0  # `_Projection._cholesky`: a bound this far below needs no eigenvalues
 LEFT_IN_SPAN = 1e-4  # `_Projection.gram_rows` by its one product where the nuisances leave
 # at least this share of each row's sum of squares
 SYRK_FROM = 1 << 16  # samples from which `_Projection` forms X^T X by syrk (five columns,
@@ -4432,22 +4440,43 @@ class _Projection:
         scale = np.sqrt(np.diag(gram))
         scale = np.where(scale > 0, scale, 1.0)
         gram = gram / np.outer(scale, scale)
-        R = None
-        values = np.linalg.eigvalsh(gram) if XT.shape[0] else np.zeros(0)  # (its condition)
-        if XT.shape[0] and values[0] > 0 and values[-1] < GRAM_CONDITION * values[0]:  # R from it
-            R = np.linalg.cholesky(gram).T
+        R, inverse = self._cholesky(gram) if XT.shape[0] else (None, None)
         if R is None or not np.isfinite(R).all():
-            R = np.linalg.qr(XT.T / scale, mode="r")
+            R, inverse = np.linalg.qr(XT.T / scale, mode="r"), None
         size = np.abs(np.diag(R))
         self.kept = size > ROUNDING * XT.shape[1] * max(size.max(initial=0.0), 1e-300)
         if not self.kept.all():
             XT = np.ascontiguousarray(XT[self.kept])
             scale = scale[self.kept]
-            R = np.linalg.qr(XT.T / scale, mode="r")
+            R, inverse = np.linalg.qr(XT.T / scale, mode="r"), None
         self.XT = XT
         self.rank = int(self.kept.sum())
         # R^-1 of X itself (X = Q R): a small triangular matrix, applied by products
-        self.inverse = np.linalg.inv(R) / scale[:, None] if self.rank else np.zeros((0, 0))
+        if self.rank:
+            self.inverse = (np.linalg.inv(R) if inverse is None else inverse) / scale[:, None]
+        else:
+            self.inverse = np.zeros((0, 0))
+
+    @staticmethod
+    def _cholesky(gram: np.ndarray) -> tuple:
+        """(R, R^-1 where found) of the Cholesky factorisation gram = R^T R of a scaled Gram
+        matrix (unit diagonal) whose condition is below GRAM_CONDITION, else (None, None). The
+        condition is at most trace |R^-1|_F^2 (the largest eigenvalue under the trace, the
+        least one's reciprocal |R^-1|_2^2 under |R^-1|_F^2): where that bound is CLEAR_CONDITION
+        below GRAM_CONDITION (measured: 10 to 125 on the speed records, conditions 2 to 68) the
+        eigenvalues are not computed; elsewhere they decide, as they did."""
+        try:
+            R = np.linalg.cholesky(gram).T
+        except np.linalg.LinAlgError:  # (not positive definite in floating point)
+            R = None
+        if R is not None and np.isfinite(R).all():
+            inverse = np.linalg.inv(R)
+            if gram.shape[0] * float(np.sum(inverse * inverse)) < GRAM_CONDITION / CLEAR_CONDITION:
+                return R, inverse
+        values = np.linalg.eigvalsh(gram)  # (its condition)
+        if values[0] > 0 and values[-1] < GRAM_CONDITION * values[0]:
+            return (np.linalg.cholesky(gram).T if R is None else R), None
+        return None, None
 
     def fit(self, W: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """(coefficients (columns of X, columns of W), W less X times them)."""
@@ -4676,27 +4705,34 @@ def _predictor_stable(real: _Realisation) -> bool:
     """Whether G(s, k) is stable (an integrator, a pole at 0, is allowed): the output-error
     predictor of an unstable model diverges, and a noise model would read the divergence
     as noise. The poles from F's diagonal blocks (its real Schur form)."""
-    poles = _schur_poles(real.F)
-    size = float(np.abs(poles).max(initial=0.0))
-    return bool((poles.real <= ROUNDING * max(size, 1e-300) * real.order).all())
+    poles = _schur_poles(real.F, real.blocks)
+    bound = ROUNDING * max(max((abs(pole) for pole in poles), default=0.0), 1e-300) * real.order
+    return all(pole.real <= bound for pole in poles)
 
 
-def _schur_poles(F: np.ndarray) -> np.ndarray:
+def _schur_poles(F: np.ndarray, blocks) -> list[complex]:
     """The eigenvalues of a quasi-triangular F from its 1 x 1 and 2 x 2 diagonal blocks
-    (np.linalg.eigvals where F is not one)."""
-    blocks = _diagonal_blocks(F) if F.shape[0] else []
+    (`_diagonal_blocks`; None: np.linalg.eigvals, F not being one), in Python's scalars
+    (numpy's calls on so few numbers cost more than the arithmetic)."""
+    if not F.shape[0]:
+        return []
     if blocks is None:
-        return np.linalg.eigvals(F)
+        return [complex(pole) for pole in np.linalg.eigvals(F)]
+    rows = F.tolist()
     poles = []
     for start, size in blocks:
         if size == 1:
-            poles.append(complex(F[start, start]))
+            poles.append(complex(rows[start][start]))
             continue
-        (a, b), (c, d) = F[start : start + 2, start : start + 2]
+        (a, b), (c, d) = rows[start][start : start + 2], rows[start + 1][start : start + 2]
         half, mean = 0.5 * (a - d), 0.5 * (a + d)
-        root = np.sqrt(complex(half * half + b * c))
+        square = half * half + b * c  # (its square root as np.sqrt's of the complex number)
+        if square >= 0:
+            root = complex(math.sqrt(square), 0.0)
+        else:
+            root = complex(0.0, math.sqrt(-square)) if square < 0 else complex(math.nan, math.nan)
         poles += [mean + root, mean - root]
-    return np.array(poles, dtype=complex)
+    return poles
 
 
 def _independence(eps: np.ndarray, u: np.ndarray) -> float:
