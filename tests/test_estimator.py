@@ -60,6 +60,40 @@ def test_absorber_local_minima_and_cost(absorber, noisy_absorber):
     assert np.all(J >= -1e-15)  # k^ is the global minimum
 
 
+def test_one_polynomials_minima_are_the_rows_bit_for_bit(absorber):
+    """The fit's criterion (one row) is minimised in Python's arithmetic (`_global_minimiser`,
+    `_polished`), blocks of rows in numpy's (`_global_minimisers`, `_polish`): the same
+    floats, on polynomials of every kind (lower degree, constant, multiple roots, huge)."""
+    rng = np.random.default_rng(7)
+    found = 0
+    for trial in range(3000):
+        width = int(rng.integers(2, 10))
+        A = rng.standard_normal(width) * 10 ** rng.uniform(-3, 3, width)
+        if trial % 5 == 1:
+            A[-int(rng.integers(1, width)) :] = 0.0
+        elif trial % 5 == 2:
+            A = np.poly1d(np.repeat(rng.standard_normal(1), width - 1), r=True).coeffs[::-1] * 1.0
+        elif trial % 5 == 3:
+            A = np.round(A) * 10.0 ** (150 * (trial % 2))
+        bounds = [(-math.inf, math.inf), (-1.0, 1.0), (0.0, math.inf), (-math.inf, 0.5)][trial % 4]
+        centre = [0.0, float(rng.standard_normal())][trial % 2]
+        rows = np.stack([A, rng.standard_normal(width)])
+        with np.errstate(all="ignore"):  # (the huge ones overflow)
+            expected = absorber._global_minimisers(rows, np.array([centre, 0.0]), bounds)[0]
+        got = absorber._global_minimiser(A, centre, bounds)
+        assert np.array_equal(np.float64(got).view(np.int64), expected.view(np.int64)), trial
+        found += math.isfinite(got)
+        D = A[None, 1:] * np.arange(1, width)
+        roots = absorber._companion_roots(D)
+        roots = roots.real[:, np.isfinite(roots[0])]
+        with np.errstate(all="ignore"):
+            polished = absorber._polish(D, roots)[0]
+        assert [
+            absorber._polished(D[0].tolist(), x) for x in roots[0].tolist()
+        ] == polished.tolist()
+    assert 1000 < found < 2900
+
+
 @pytest.mark.parametrize("hold,interp", [("linear", True), ("zoh", False)])
 def test_simulate_is_exact_for_its_hold(dc_drive, hold, interp):
     t = np.linspace(0.0, 5.0, 251)
