@@ -2960,6 +2960,49 @@ def _derivatives(c: np.ndarray, needs: tuple[int, ...]) -> np.ndarray:
     return np.array(rows)
 
 
+KEPT_FILTERS = 16  # `_kept_filter`'s entries (four a filter): the filters of a few fits
+_FILTERS: dict = {}
+
+
+def _kept_filter(key: tuple, make) -> tuple:
+    """make()'s tuple, its arrays read-only, kept under key (C(s) as bytes, and what else it
+    depends on), the oldest of KEPT_FILTERS dropped: every record of a fit has its filter
+    (chosen from the model's values and the sampling, `_filter_for`, not from the data), as
+    have the fits of a run of records of one experiment. What it keeps (the coordinates, one
+    interval's maps, the derivatives) costs a record of 2e4 samples a fifth of its moments."""
+    found = _FILTERS.get(key)
+    if found is None:
+        found = make()
+        for array in found:
+            if isinstance(array, np.ndarray):
+                array.flags.writeable = False
+        if len(_FILTERS) >= KEPT_FILTERS:
+            _FILTERS.pop(next(iter(_FILTERS)))
+        _FILTERS[key] = found
+    return found
+
+
+def _filter_coordinates(c: np.ndarray) -> tuple:
+    """(F, g, V, blocks): the filter 1/C(s) as z' = F z + g w in its balanced real Schur
+    coordinates z = V^-1 x (`_schur_coordinates`; the cascade for (1 + sT)^q), and F's
+    diagonal blocks."""
+    A, B = _realisation(c)
+    F, V, inverse, blocks = _schur_coordinates(A)
+    return F, inverse @ B, V, blocks
+
+
+def _derivatives_in(c: np.ndarray, needs: tuple[int, ...], V) -> np.ndarray:
+    """`_derivatives` acting on the signals' states in the filter's coordinates z = V^-1 x
+    (V None: x's own)."""
+    order = c.size - 1
+    S = _derivatives(c, needs)
+    if V is not None:  # S acts on x = V z
+        S = S.reshape(S.shape[0], len(needs), order + 2)
+        S[:, :, :order] = S[:, :, :order] @ V
+        S = S.reshape(S.shape[0], -1)
+    return S
+
+
 def _filtered_moments(c, t, W, holds, needs, beta: float = 0.0, steps=None) -> np.ndarray:
     """int e^(-beta (t_end - tau)) D D^T dtau over the record, D = the filtered derivatives
     of the signals W (one per row, each interpolated per its hold; see `_derivatives`).
@@ -2972,11 +3015,9 @@ def _filtered_moments(c, t, W, holds, needs, beta: float = 0.0, steps=None) -> n
     own scale whatever the time unit, where the companion states s^i w / C differ by T^i.
     The intervals' Gram matrices (`_blocked_gram`, else `_interval_grams`) go through the
     integral over the interval (`_interval_integral`) and only then to the derivatives.
-    steps: t's `_Steps`, where the caller has them."""
-    order = c.size - 1
-    A, B = _realisation(c)
-    F, V, inverse, blocks = _schur_coordinates(A)
-    g = inverse @ B
+    What depends on the filter alone is kept (`_kept_filter`). steps: t's `_Steps`, where
+    the caller has them."""
+    F, g, V, blocks = _kept_filter(("coordinates", c.tobytes()), lambda: _filter_coordinates(c))
     steps = _Steps.of(t) if steps is None else steps
     grams = None
     if steps.index is None and blocks is not None:
@@ -2984,11 +3025,7 @@ def _filtered_moments(c, t, W, holds, needs, beta: float = 0.0, steps=None) -> n
     if grams is None:
         grams = _interval_grams(F, g, t, W, holds, steps, beta)
     M = sum(h * _interval_integral(F, g, len(holds), h, beta, Q) for h, Q in zip(steps.values, grams))
-    S = _derivatives(c, needs)
-    if V is not None:  # S acts on x = V z
-        S = S.reshape(S.shape[0], len(holds), order + 2)
-        S[:, :, :order] = S[:, :, :order] @ V
-        S = S.reshape(S.shape[0], -1)
+    (S,) = _kept_filter(("derivatives", c.tobytes(), needs), lambda: (_derivatives_in(c, needs, V),))
     M = S @ M @ S.T
     return 0.5 * (M + M.T)
 
@@ -2998,12 +3035,14 @@ def _blocked_gram(F, g, blocks, h: float, t, W, holds, beta: float) -> list[np.n
     v_l = each signal's [z_l; w_l; w_(l+1) - w_l] (the increment 0 for a held signal), z in
     the quasi-triangular F's coordinates; None where `_blocked` does not apply. From the
     blocks of `_blocked` (m samples each: v_(bm+l) a map of P_b, the block's first state and
-    samples, every signal's): the Gram matrix of the N/m vectors P_b, then the m maps,
-    without forming the states within the blocks."""
+    samples, every signal's): the Gram matrix of the N/m vectors P_b, then the m maps
+    (`_gram_map`), without forming the states within the blocks. The filter's step and
+    maps are kept (`_kept_filter`)."""
     order, count = F.shape[0], len(holds)
     width, steps = order + 2, t.size - 1
-    Phi, Gamma = _transitions(F, g, np.array([h]), holds)
-    found = _blocked(Phi[0], Gamma[0], np.zeros(order), blocks, W)
+    key = ("step", F.tobytes(), g.tobytes(), h, holds, _block_length(steps))
+    Phi, Gamma, powers, K = _kept_filter(key, lambda: _filter_step(F, g, h, holds, key[-1]))
+    found = _blocked(Phi, Gamma, np.zeros(order), blocks, W, maps=None if powers is None else (powers, K))
     if found is None:
         return None
     m, powers, K, P, _ = found
@@ -3012,27 +3051,14 @@ def _blocked_gram(F, g, blocks, h: float, t, W, holds, beta: float) -> list[np.n
     # state, its samples but the last where held (it drives no state within the block), and
     # one for all of a constant signal's samples (the unit step's): the Gram matrix of the
     # p_b costs the square of their number
-    kept, rows, step = [], [], np.arange(m)
-    for j, hold in enumerate(holds):
-        samples = np.zeros((m + 1, m, width))  # (sample, l, v's entry)
-        samples[:, :, :order] = K[j, :m].transpose(1, 0, 2)
-        samples[step, step, order] = 1.0
-        if hold == "linear":
-            samples[step, step, order + 1], samples[step + 1, step, order + 1] = -1.0, 1.0
-        if W[j, 0] == W[j, -1] and (W[j] == W[j, 0]).all():
-            samples = samples.sum(0, keepdims=True)
-        elif hold != "linear":
-            samples = samples[:m]
-        kept.append(P[j, :, : order + len(samples)].T)
-        block = np.zeros((order + len(samples), m, d))
-        block[:order, :, j * width : j * width + order] = powers[:m].transpose(2, 0, 1)
-        block[order:, :, j * width : (j + 1) * width] = samples
-        rows.append(block)
-    Map = np.concatenate(rows)
+    constants = tuple(bool(W[j, 0] == W[j, -1] and (W[j] == W[j, 0]).all()) for j in range(count))
+    (Map,) = _kept_filter(key + constants, lambda: (_gram_map(powers, K, holds, constants),))
+    kept = [P[j, :, : order + (1 if constant else m + 1 if hold == "linear" else m)].T
+            for j, (hold, constant) in enumerate(zip(holds, constants, strict=True))]  # fmt: skip
     columns = np.empty((sum(len(part) for part in kept), P.shape[1]))  # (BLAS takes P by columns)
     P = np.concatenate(kept, out=columns).T  # (blocks, kept entries)
     if beta:
-        Map *= np.exp(0.5 * beta * h * np.arange(m))[:, None]
+        Map = Map * np.exp(0.5 * beta * h * np.arange(m))[:, None]
         P *= np.exp(-0.5 * beta * (t[-1] - t[: steps : m]))[:, None]
     top = P[:full]
     mapped = (top.T @ top) @ Map.reshape(len(Map), -1)
@@ -3042,6 +3068,41 @@ def _blocked_gram(F, g, blocks, h: float, t, W, holds, beta: float) -> list[np.n
         tail = tail.reshape(steps - full * m, d)
         Q += tail.T @ tail
     return [Q]
+
+
+def _filter_step(F, g, h: float, holds: tuple, m: int) -> tuple:
+    """(Phi, Gamma, powers, K): the filter z' = F z + g w over one interval h for the holds
+    (`_transitions`) and its maps over blocks of m (`_step_maps`; None where Phi is not
+    finite, which `_blocked` refuses)."""
+    Phi, Gamma = _transitions(F, g, np.array([h]), holds)
+    Phi, Gamma = Phi[0], Gamma[0]
+    powers, K = _step_maps(Phi, Gamma, m) if np.isfinite(Phi).all() else (None, None)
+    return Phi, Gamma, powers, K
+
+
+def _gram_map(powers: np.ndarray, K: np.ndarray, holds: tuple, constants: tuple) -> np.ndarray:
+    """`_blocked_gram`'s Map (kept entries, m, signals (order + 2)): v_(bm+l) = p_b Map[:, l],
+    from the step maps of blocks of m (`_step_maps`: Phi^0..Phi^m, K) and which signals are
+    constant (one entry for all their samples)."""
+    order, m = powers.shape[1], K.shape[1] - 1
+    width = order + 2
+    d = len(holds) * width
+    rows, step = [], np.arange(m)
+    for j, (hold, constant) in enumerate(zip(holds, constants, strict=True)):
+        samples = np.zeros((m + 1, m, width))  # (sample, l, v's entry)
+        samples[:, :, :order] = K[j, :m].transpose(1, 0, 2)
+        samples[step, step, order] = 1.0
+        if hold == "linear":
+            samples[step, step, order + 1], samples[step + 1, step, order + 1] = -1.0, 1.0
+        if constant:
+            samples = samples.sum(0, keepdims=True)
+        elif hold != "linear":
+            samples = samples[:m]
+        block = np.zeros((order + len(samples), m, d))
+        block[:order, :, j * width : j * width + order] = powers[:m].transpose(2, 0, 1)
+        block[order:, :, j * width : (j + 1) * width] = samples
+        rows.append(block)
+    return np.concatenate(rows)
 
 
 def _interval_grams(F, g, t, W, holds, steps: "_Steps", beta: float) -> list[np.ndarray]:
@@ -3954,21 +4015,27 @@ def _block_starts(Phi_m: np.ndarray, drives: np.ndarray, z0, blocks, modes, m: i
             x[:, start:end, lo + 1 : hi + 1] = 2.0 * (vector * xi[:, None, :]).real
 
 
-def _blocked(Phi: np.ndarray, Gamma: np.ndarray, z0: np.ndarray, blocks, samples: np.ndarray, states=None):
+def _block_length(steps: int) -> int:
+    """m of `_blocked` for a record of that many steps."""
+    return TRIANGULAR_BLOCK if steps >= BLOCKED_FROM * TRIANGULAR_BLOCK else 1
+
+
+def _blocked(Phi: np.ndarray, Gamma: np.ndarray, z0: np.ndarray, blocks, samples: np.ndarray, states=None,
+             maps=None):  # fmt: skip
     """`_triangular`'s block recursion: (m, Phi^0..Phi^m, K, V, x) with V (signals, B, order
     + m + 1) each block's [x_b, its m + 1 samples (then 0)] and x (signals, order, B + 1) the
     block starts x_0..x_B, for the samples (signals, N + 1) from z0; None when Phi is not
     finite or a 2 x 2 block is not a well-conditioned complex pair. m = TRIANGULAR_BLOCK, or
     1 on short records (the block starts are then every state: written into `states` if
-    given)."""
+    given). maps: `_step_maps(Phi, Gamma, m)`, where the caller has them."""
     if not np.isfinite(Phi).all():
         return None
     modes = {start: _pair_mode(Phi[start : start + 2, start : start + 2]) for start, size in blocks if size == 2}
     if any(mode is None for mode in modes.values()):
         return None
     order, count, steps = Phi.shape[0], Gamma.shape[0], samples.shape[1] - 1
-    m = TRIANGULAR_BLOCK if steps >= BLOCKED_FROM * TRIANGULAR_BLOCK else 1
-    powers, K = _step_maps(Phi, Gamma, m)
+    m = _block_length(steps)
+    powers, K = _step_maps(Phi, Gamma, m) if maps is None else maps
     full, B = steps // m, -(-steps // m)  # blocks of m steps, and with the shorter last one
     V = np.empty((count, B, order + m + 1))  # (each entry written below)
     V[:, :full, order:-1] = samples[:, : full * m].reshape(count, full, m)

@@ -68,3 +68,30 @@ def test_moments_are_exact_for_a_filter_fast_against_the_sampling(dc_drive):
     got = dc_drive.moments(t, u, y, C=0.005, hold="zoh", offset=False, initial_state=False).XX
     size = np.sqrt(np.outer(np.diag(expected), np.diag(expected)))
     assert np.max(np.abs(got - expected) / size) < 1e-6  # (was 7.6e5; the reference's own: 6e-8)
+
+
+def test_kept_filter_maps_give_the_moments_computed_afresh(dc_drive):
+    """The filter's coordinates, step maps and derivatives are kept from record to record
+    (`_kept_filter`): the moments of each record, with forgetting (beta scales a kept map)
+    and without, in any order, are those computed afresh, bit for bit; what is kept is
+    read-only."""
+    t = 0.01 * np.arange(2001)  # (2000 steps: the blocked recursion's blocks of 16)
+    c = dc_drive.filter_polynomial(0.3)
+    rng = np.random.default_rng(5)
+    records = [np.array([rng.standard_normal(t.size), np.sign(rng.standard_normal(t.size)),
+                         np.ones(t.size)]) for _ in range(2)]  # fmt: skip
+    holds, needs = ("linear", "zoh", "zoh"), (dc_drive.n, dc_drive.m, dc_drive.n)
+
+    def moments(i: int, beta: float) -> np.ndarray:
+        return dc_drive._filtered_moments(c, t, records[i], holds, needs, beta)
+
+    expected = {}
+    for question in [(0, 0.0), (1, 0.0), (0, 0.2), (1, 0.2)]:
+        dc_drive._FILTERS.clear()
+        expected[question] = moments(*question)
+    dc_drive._FILTERS.clear()
+    for question in [(0, 0.0), (1, 0.2), (0, 0.2), (1, 0.0), (0, 0.0), (1, 0.2)]:
+        assert np.array_equal(moments(*question), expected[question]), question
+    kept = [array for found in dc_drive._FILTERS.values() for array in found
+            if isinstance(array, np.ndarray)]  # fmt: skip
+    assert len(dc_drive._FILTERS) == 4 and kept and not any(array.flags.writeable for array in kept)
