@@ -4552,9 +4552,15 @@ class _Projection:
         return projection
 
     def _factorise(self, XT: np.ndarray) -> None:
-        # (numpy's syrk for X^T X runs slower than gemm on a copy of X^T, but for the
-        # longest records, where the copy is the dearer part)
-        gram = XT @ (XT.T if XT.shape[1] > SYRK_FROM else XT.copy().T)
+        # X^T X by BLAS's dgemm on X^T's rows as they are: numpy's matmul runs syrk on them,
+        # slower on these shapes, and gemm only on a copy (measured: 0.12-0.23 ms less a fit
+        # of 2e4 samples, 4 and 5 rows; the same bits as numpy's gemm on 3500 random shapes
+        # of 2 to 8 rows; one row numpy takes by a dot product, of other bits); the longest
+        # records by syrk, faster there than the copy
+        if XT.shape[0] > 1 and XT.shape[1] <= SYRK_FROM:
+            gram = linalg.blas.dgemm(1.0, XT.T, XT.T, trans_a=1)
+        else:
+            gram = XT @ (XT.T if XT.shape[1] > SYRK_FROM else XT.copy().T)
         scale = np.sqrt(np.diag(gram))
         scale = np.where(scale > 0, scale, 1.0)
         gram = gram / np.outer(scale, scale)
