@@ -2977,7 +2977,7 @@ def _kept_filter(key: tuple, make) -> tuple:
             if isinstance(array, np.ndarray):
                 array.flags.writeable = False
         if len(_FILTERS) >= KEPT_FILTERS:
-            _FILTERS.pop(next(iter(_FILTERS)))
+            _FILTERS.pop(next(iter(_FILTERS), None), None)  # (another thread may have dropped it)
         _FILTERS[key] = found
     return found
 
@@ -4890,7 +4890,7 @@ def _input_correlations(u: np.ndarray, lags: int) -> tuple[np.ndarray, np.ndarra
         rho = _lagged_products(v, v, range(lags)) / power if power else np.zeros(lags)
         inverse = np.linalg.pinv(linalg.toeplitz(rho), rcond=1e-8)
         if len(_INPUTS) >= 8:
-            _INPUTS.pop(next(iter(_INPUTS)))
+            _INPUTS.pop(next(iter(_INPUTS), None), None)  # (another thread may have dropped it)
         found = _INPUTS[id(u)] = (u.copy(), lags, v, inverse)
     return found[2], found[3]
 
