@@ -2958,211 +2958,6 @@ def _derivatives(c: np.ndarray, needs: tuple[int, ...]) -> np.ndarray:
     return np.array(rows)
 
 
-KEPT_FILTERS = 16  # `_kept_filter`'s entries (four a filter): the filters of a few fits
-_FILTERS: dict = {}
-
-
-def _kept_filter(key: tuple, make) -> tuple:
-    """make()'s tuple, its arrays read-only, kept under key (C(s) as bytes, and what else it
-    depends on), the oldest of KEPT_FILTERS dropped: every record of a fit has its filter
-    (chosen from the model's values and the sampling, `_filter_for`, not from the data), as
-    have the fits of a run of records of one experiment. What it keeps (the coordinates, one
-    interval's maps, the derivatives) costs a record of 2e4 samples a fifth of its moments."""
-    found = _FILTERS.get(key)
-    if found is None:
-        found = make()
-        for array in found:
-            if isinstance(array, np.ndarray):
-                array.flags.writeable = False
-        if len(_FILTERS) >= KEPT_FILTERS:
-            _FILTERS.pop(next(iter(_FILTERS), None), None)  # (another thread may have dropped it)
-        _FILTERS[key] = found
-    return found
-
-
-def _filter_coordinates(c: np.ndarray) -> tuple:
-    """(F, g, V, blocks): the filter 1/C(s) as z' = F z + g w in its balanced real Schur
-    coordinates z = V^-1 x (`_schur_coordinates`; the cascade for (1 + sT)^q), and F's
-    diagonal blocks."""
-    A, B = _realisation(c)
-    F, V, inverse, blocks = _schur_coordinates(A)
-    return F, inverse @ B, V, blocks
-
-
-def _derivatives_in(c: np.ndarray, needs: tuple[int, ...], V) -> np.ndarray:
-    """`_derivatives` acting on the signals' states in the filter's coordinates z = V^-1 x
-    (V None: x's own)."""
-    order = c.size - 1
-    S = _derivatives(c, needs)
-    if V is not None:  # S acts on x = V z
-        S = S.reshape(S.shape[0], len(needs), order + 2)
-        S[:, :, :order] = S[:, :, :order] @ V
-        S = S.reshape(S.shape[0], -1)
-    return S
-
-
-def _filtered_moments(c, t, W, holds, needs, beta: float = 0.0, steps=None) -> np.ndarray:
-    """int e^(-beta (t_end - tau)) D D^T dtau over the record, D = the filtered derivatives
-    of the signals W (one per row, each interpolated per its hold; see `_derivatives`).
-    Exact for the holds (see above): the weight is e^(-beta (t_end - t_l)) at an interval's
-    start, times e^(beta tau) within it, which shifts G by beta/2.
-
-    Everything is done in the filter's balanced real Schur coordinates z = V^-1 x
-    (`_schur_coordinates`: the cascade for (1 + sT)^q), with each signal's level and its
-    increment over the interval (the slope times h): there every state has the signal's
-    own scale whatever the time unit, where the companion states s^i w / C differ by T^i.
-    The intervals' Gram matrices (`_blocked_gram`, else `_interval_grams`) go through the
-    integral over the interval (`_interval_integral`) and only then to the derivatives.
-    What depends on the filter alone is kept (`_kept_filter`). steps: t's `_Steps`, where
-    the caller has them."""
-    F, g, V, blocks = _kept_filter(("coordinates", c.tobytes()), lambda: _filter_coordinates(c))
-    steps = _Steps.of(t) if steps is None else steps
-    grams = None
-    if steps.index is None and blocks is not None:
-        grams = _blocked_gram(F, g, blocks, steps.values[0], t, W, holds, beta)
-    if grams is None:
-        grams = _interval_grams(F, g, t, W, holds, steps, beta)
-    M = sum(h * _interval_integral(F, g, len(holds), h, beta, Q) for h, Q in zip(steps.values, grams))
-    (S,) = _kept_filter(("derivatives", c.tobytes(), needs), lambda: (_derivatives_in(c, needs, V),))
-    M = S @ M @ S.T
-    return 0.5 * (M + M.T)
-
-
-def _blocked_gram(F, g, blocks, h: float, t, W, holds, beta: float) -> list[np.ndarray] | None:
-    """[sum over the intervals of e^(-beta (t_end - t_l)) v_l v_l^T] at regular sampling,
-    v_l = each signal's [z_l; w_l; w_(l+1) - w_l] (the increment 0 for a held signal), z in
-    the quasi-triangular F's coordinates; None where `_blocked` does not apply. From the
-    blocks of `_blocked` (m samples each: v_(bm+l) a map of P_b, the block's first state and
-    samples, every signal's): the Gram matrix of the N/m vectors P_b, then the m maps
-    (`_gram_map`), without forming the states within the blocks. The filter's step and
-    maps are kept (`_kept_filter`)."""
-    order, count = F.shape[0], len(holds)
-    width, steps = order + 2, t.size - 1
-    key = ("step", F.tobytes(), g.tobytes(), h, holds, _block_length(steps))
-    Phi, Gamma, powers, K = _kept_filter(key, lambda: _filter_step(F, g, h, holds, key[-1]))
-    found = _blocked(Phi, Gamma, np.zeros(order), blocks, W, maps=None if powers is None else (powers, K))
-    if found is None:
-        return None
-    m, powers, K, P, _ = found
-    full, d = steps // m, count * width
-    # v_(bm+l) = p_b Map[:, l], p_b the entries of P_b that some v uses: each signal's first
-    # state, its samples but the last where held (it drives no state within the block), and
-    # one for all of a constant signal's samples (the unit step's): the Gram matrix of the
-    # p_b costs the square of their number
-    constants = tuple(bool(W[j, 0] == W[j, -1] and (W[j] == W[j, 0]).all()) for j in range(count))
-    (Map,) = _kept_filter(key + constants, lambda: (_gram_map(powers, K, holds, constants),))
-    kept = [P[j, :, : order + (1 if constant else m + 1 if hold == "linear" else m)].T
-            for j, (hold, constant) in enumerate(zip(holds, constants, strict=True))]  # fmt: skip
-    columns = np.empty((sum(len(part) for part in kept), P.shape[1]))  # (BLAS takes P by columns)
-    P = np.concatenate(kept, out=columns).T  # (blocks, kept entries)
-    if beta:
-        Map = Map * np.exp(0.5 * beta * h * np.arange(m))[:, None]
-        P *= np.exp(-0.5 * beta * (t[-1] - t[: steps : m]))[:, None]
-    top = P[:full]
-    mapped = (top.T @ top) @ Map.reshape(len(Map), -1)
-    Q = Map.reshape(-1, d).T @ mapped.reshape(-1, d)
-    if full < P.shape[0]:  # the last, shorter block (its samples past the end are 0)
-        tail = P[full] @ Map[:, : steps - full * m].reshape(len(Map), -1)
-        tail = tail.reshape(steps - full * m, d)
-        Q += tail.T @ tail
-    return [Q]
-
-
-def _filter_step(F, g, h: float, holds: tuple, m: int) -> tuple:
-    """(Phi, Gamma, powers, K): the filter z' = F z + g w over one interval h for the holds
-    (`_transitions`) and its maps over blocks of m (`_step_maps`; None where Phi is not
-    finite, which `_blocked` refuses)."""
-    Phi, Gamma = _transitions(F, g, np.array([h]), holds)
-    Phi, Gamma = Phi[0], Gamma[0]
-    powers, K = _step_maps(Phi, Gamma, m) if np.isfinite(Phi).all() else (None, None)
-    return Phi, Gamma, powers, K
-
-
-def _gram_map(powers: np.ndarray, K: np.ndarray, holds: tuple, constants: tuple) -> np.ndarray:
-    """`_blocked_gram`'s Map (kept entries, m, signals (order + 2)): v_(bm+l) = p_b Map[:, l],
-    from the step maps of blocks of m (`_step_maps`: Phi^0..Phi^m, K) and which signals are
-    constant (one entry for all their samples)."""
-    order, m = powers.shape[1], K.shape[1] - 1
-    width = order + 2
-    d = len(holds) * width
-    rows, step = [], np.arange(m)
-    for j, (hold, constant) in enumerate(zip(holds, constants, strict=True)):
-        samples = np.zeros((m + 1, m, width))  # (sample, l, v's entry)
-        samples[:, :, :order] = K[j, :m].transpose(1, 0, 2)
-        samples[step, step, order] = 1.0
-        if hold == "linear":
-            samples[step, step, order + 1], samples[step + 1, step, order + 1] = -1.0, 1.0
-        if constant:
-            samples = samples.sum(0, keepdims=True)
-        elif hold != "linear":
-            samples = samples[:m]
-        block = np.zeros((order + len(samples), m, d))
-        block[:order, :, j * width : j * width + order] = powers[:m].transpose(2, 0, 1)
-        block[order:, :, j * width : (j + 1) * width] = samples
-        rows.append(block)
-    return np.concatenate(rows)
-
-
-def _interval_grams(F, g, t, W, holds, steps: "_Steps", beta: float) -> list[np.ndarray]:
-    """`_blocked_gram`'s sums for any sampling, one per distinct step (`_Steps`), from the
-    states at every sample (`_responses`)."""
-    order, count = F.shape[0], len(holds)
-    width = order + 2
-    rows = np.empty((count, width, t.size - 1))
-    rows[:, :order] = _responses(F, g, t, W, holds)[:, :-1].transpose(0, 2, 1)
-    rows[:, order] = W[:, :-1]
-    for j, hold in enumerate(holds):
-        rows[j, order + 1] = np.diff(W[j]) if hold == "linear" else 0.0
-    X = rows.reshape(count * width, -1)
-    if beta:
-        X = X * np.exp(-0.5 * beta * (t[-1] - t[:-1]))
-    if steps.index is None:
-        return [X @ X.T]
-    grams = np.zeros((steps.values.size, X.shape[0], X.shape[0]))
-    for lo in range(0, X.shape[1], 4096):
-        part = X[:, lo : lo + 4096].T
-        np.add.at(grams, steps.index[lo : lo + 4096], part[:, :, None] * part[:, None, :])
-    return list(grams)
-
-
-HALF_RATE = 0.5  # |G| sigma at most this in a Van Loan exponential: e^(-G sigma) stays near 1
-
-
-def _interval_integral(F, g, count: int, h: float, beta: float, Q: np.ndarray) -> np.ndarray:
-    """int_0^1 e^(G s) Q e^(G^T s) ds: the integral over one interval of h (time tau = h s)
-    of v v^T for every start vector of the Gram matrix Q, v = each signal's [z; level;
-    increment] with z' = h (F z + g level), level' = increment (G also shifted by beta h /
-    2, the weight). Van Loan's block exponential over a fraction 2^-k of the interval short
-    enough that e^(-G s) stays near 1 (over the whole one, for a filter fast against the
-    sampling, it grows as e^(h / T) and the difference that makes the integral loses every
-    digit), then k doublings M(2s) = M(s) + e^(G s) M(s) e^(G^T s), sums of positive
-    terms. Q is scaled to 1 in the exponential (its backward error is relative to the
-    whole block)."""
-    order = F.shape[0]
-    width = order + 2
-    d = count * width
-    one = np.zeros((width, width))
-    one[:order, :order], one[:order, order], one[order, order + 1] = h * F, h * g, 1.0
-    G = 0.5 * beta * h * np.eye(d)
-    for j in range(count):
-        G[j * width : (j + 1) * width, j * width : (j + 1) * width] += one
-    rate = np.abs(one[: order + 1, : order + 1]).sum(0).max() + 0.5 * beta * h
-    halvings = max(0, math.ceil(math.log2(rate / HALF_RATE))) if rate > HALF_RATE else 0
-    size = np.abs(Q).max()
-    if not size > 0:
-        return Q.copy()  # 0 (or not finite: said so by the caller)
-    s = 2.0**-halvings
-    block = np.zeros((2 * d, 2 * d))
-    block[:d, :d], block[:d, d:], block[d:, d:] = -s * G, (s / size) * Q, s * G.T
-    E = linalg.expm(block)
-    Phi = E[d:, d:].T  # e^(G s)
-    M = Phi @ E[:d, d:]
-    for _ in range(halvings):
-        M = M + Phi @ M @ Phi.T
-        Phi = Phi @ Phi
-    return size * 0.5 * (M + M.T)
-
-
 def _project_out(M: np.ndarray, keep: int) -> np.ndarray:
     """The moments of the first `keep` signals with the rest (nuisances) projected out."""
     if M.shape[0] == keep:
@@ -3381,6 +3176,219 @@ def moments(t, u, y, *, k=None, C=None, hold: str = "linear", offset: bool = Tru
         c = None if C is None else filter_polynomial(C)
     return _record_moments(Theta, t, u, y, k=k, c=c, hold=hold, offset=bool(offset),
                            initial_state=bool(initial_state), beta=0.0, known=known)  # fmt: skip
+
+
+# The moments of one record's filtered signals: the filter's maps, the intervals' Gram matrices --
+#
+# `_filtered_moments` forms int v v^T over a record (see statistics.py.j2's header) from the Gram
+# matrix of the intervals' start vectors v_l (`_blocked_gram` at regular sampling, else
+# `_interval_grams`) and one Van Loan exponential per distinct interval (`_interval_integral`);
+# what depends on the filter alone is kept from record to record (`_kept_filter`).
+
+
+KEPT_FILTERS = 16  # `_kept_filter`'s entries (four a filter): the filters of a few fits
+_FILTERS: dict = {}
+
+
+def _kept_filter(key: tuple, make) -> tuple:
+    """make()'s tuple, its arrays read-only, kept under key (C(s) as bytes, and what else it
+    depends on), the oldest of KEPT_FILTERS dropped: every record of a fit has its filter
+    (chosen from the model's values and the sampling, `_filter_for`, not from the data), as
+    have the fits of a run of records of one experiment. What it keeps (the coordinates, one
+    interval's maps, the derivatives) costs a record of 2e4 samples a fifth of its moments."""
+    found = _FILTERS.get(key)
+    if found is None:
+        found = make()
+        for array in found:
+            if isinstance(array, np.ndarray):
+                array.flags.writeable = False
+        if len(_FILTERS) >= KEPT_FILTERS:
+            _FILTERS.pop(next(iter(_FILTERS), None), None)  # (another thread may have dropped it)
+        _FILTERS[key] = found
+    return found
+
+
+def _filter_coordinates(c: np.ndarray) -> tuple:
+    """(F, g, V, blocks): the filter 1/C(s) as z' = F z + g w in its balanced real Schur
+    coordinates z = V^-1 x (`_schur_coordinates`; the cascade for (1 + sT)^q), and F's
+    diagonal blocks."""
+    A, B = _realisation(c)
+    F, V, inverse, blocks = _schur_coordinates(A)
+    return F, inverse @ B, V, blocks
+
+
+def _derivatives_in(c: np.ndarray, needs: tuple[int, ...], V) -> np.ndarray:
+    """`_derivatives` acting on the signals' states in the filter's coordinates z = V^-1 x
+    (V None: x's own)."""
+    order = c.size - 1
+    S = _derivatives(c, needs)
+    if V is not None:  # S acts on x = V z
+        S = S.reshape(S.shape[0], len(needs), order + 2)
+        S[:, :, :order] = S[:, :, :order] @ V
+        S = S.reshape(S.shape[0], -1)
+    return S
+
+
+def _filtered_moments(c, t, W, holds, needs, beta: float = 0.0, steps=None) -> np.ndarray:
+    """int e^(-beta (t_end - tau)) D D^T dtau over the record, D = the filtered derivatives
+    of the signals W (one per row, each interpolated per its hold; see `_derivatives`).
+    Exact for the holds (see above): the weight is e^(-beta (t_end - t_l)) at an interval's
+    start, times e^(beta tau) within it, which shifts G by beta/2.
+
+    Everything is done in the filter's balanced real Schur coordinates z = V^-1 x
+    (`_schur_coordinates`: the cascade for (1 + sT)^q), with each signal's level and its
+    increment over the interval (the slope times h): there every state has the signal's
+    own scale whatever the time unit, where the companion states s^i w / C differ by T^i.
+    The intervals' Gram matrices (`_blocked_gram`, else `_interval_grams`) go through the
+    integral over the interval (`_interval_integral`) and only then to the derivatives.
+    What depends on the filter alone is kept (`_kept_filter`). steps: t's `_Steps`, where
+    the caller has them."""
+    F, g, V, blocks = _kept_filter(("coordinates", c.tobytes()), lambda: _filter_coordinates(c))
+    steps = _Steps.of(t) if steps is None else steps
+    grams = None
+    if steps.index is None and blocks is not None:
+        grams = _blocked_gram(F, g, blocks, steps.values[0], t, W, holds, beta)
+    if grams is None:
+        grams = _interval_grams(F, g, t, W, holds, steps, beta)
+    M = sum(h * _interval_integral(F, g, len(holds), h, beta, Q) for h, Q in zip(steps.values, grams))
+    (S,) = _kept_filter(("derivatives", c.tobytes(), needs), lambda: (_derivatives_in(c, needs, V),))
+    M = S @ M @ S.T
+    return 0.5 * (M + M.T)
+
+
+def _blocked_gram(F, g, blocks, h: float, t, W, holds, beta: float) -> list[np.ndarray] | None:
+    """[sum over the intervals of e^(-beta (t_end - t_l)) v_l v_l^T] at regular sampling,
+    v_l = each signal's [z_l; w_l; w_(l+1) - w_l] (the increment 0 for a held signal), z in
+    the quasi-triangular F's coordinates; None where `_blocked` does not apply. From the
+    blocks of `_blocked` (m samples each: v_(bm+l) a map of P_b, the block's first state and
+    samples, every signal's): the Gram matrix of the N/m vectors P_b, then the m maps
+    (`_gram_map`), without forming the states within the blocks. The filter's step and
+    maps are kept (`_kept_filter`)."""
+    order, count = F.shape[0], len(holds)
+    width, steps = order + 2, t.size - 1
+    key = ("step", F.tobytes(), g.tobytes(), h, holds, _block_length(steps))
+    Phi, Gamma, powers, K = _kept_filter(key, lambda: _filter_step(F, g, h, holds, key[-1]))
+    found = _blocked(Phi, Gamma, np.zeros(order), blocks, W, maps=None if powers is None else (powers, K))
+    if found is None:
+        return None
+    m, powers, K, P, _ = found
+    full, d = steps // m, count * width
+    # v_(bm+l) = p_b Map[:, l], p_b the entries of P_b that some v uses: each signal's first
+    # state, its samples but the last where held (it drives no state within the block), and
+    # one for all of a constant signal's samples (the unit step's): the Gram matrix of the
+    # p_b costs the square of their number
+    constants = tuple(bool(W[j, 0] == W[j, -1] and (W[j] == W[j, 0]).all()) for j in range(count))
+    (Map,) = _kept_filter(key + constants, lambda: (_gram_map(powers, K, holds, constants),))
+    kept = [P[j, :, : order + (1 if constant else m + 1 if hold == "linear" else m)].T
+            for j, (hold, constant) in enumerate(zip(holds, constants, strict=True))]  # fmt: skip
+    columns = np.empty((sum(len(part) for part in kept), P.shape[1]))  # (BLAS takes P by columns)
+    P = np.concatenate(kept, out=columns).T  # (blocks, kept entries)
+    if beta:
+        Map = Map * np.exp(0.5 * beta * h * np.arange(m))[:, None]
+        P *= np.exp(-0.5 * beta * (t[-1] - t[: steps : m]))[:, None]
+    top = P[:full]
+    mapped = (top.T @ top) @ Map.reshape(len(Map), -1)
+    Q = Map.reshape(-1, d).T @ mapped.reshape(-1, d)
+    if full < P.shape[0]:  # the last, shorter block (its samples past the end are 0)
+        tail = P[full] @ Map[:, : steps - full * m].reshape(len(Map), -1)
+        tail = tail.reshape(steps - full * m, d)
+        Q += tail.T @ tail
+    return [Q]
+
+
+def _filter_step(F, g, h: float, holds: tuple, m: int) -> tuple:
+    """(Phi, Gamma, powers, K): the filter z' = F z + g w over one interval h for the holds
+    (`_transitions`) and its maps over blocks of m (`_step_maps`; None where Phi is not
+    finite, which `_blocked` refuses)."""
+    Phi, Gamma = _transitions(F, g, np.array([h]), holds)
+    Phi, Gamma = Phi[0], Gamma[0]
+    powers, K = _step_maps(Phi, Gamma, m) if np.isfinite(Phi).all() else (None, None)
+    return Phi, Gamma, powers, K
+
+
+def _gram_map(powers: np.ndarray, K: np.ndarray, holds: tuple, constants: tuple) -> np.ndarray:
+    """`_blocked_gram`'s Map (kept entries, m, signals (order + 2)): v_(bm+l) = p_b Map[:, l],
+    from the step maps of blocks of m (`_step_maps`: Phi^0..Phi^m, K) and which signals are
+    constant (one entry for all their samples)."""
+    order, m = powers.shape[1], K.shape[1] - 1
+    width = order + 2
+    d = len(holds) * width
+    rows, step = [], np.arange(m)
+    for j, (hold, constant) in enumerate(zip(holds, constants, strict=True)):
+        samples = np.zeros((m + 1, m, width))  # (sample, l, v's entry)
+        samples[:, :, :order] = K[j, :m].transpose(1, 0, 2)
+        samples[step, step, order] = 1.0
+        if hold == "linear":
+            samples[step, step, order + 1], samples[step + 1, step, order + 1] = -1.0, 1.0
+        if constant:
+            samples = samples.sum(0, keepdims=True)
+        elif hold != "linear":
+            samples = samples[:m]
+        block = np.zeros((order + len(samples), m, d))
+        block[:order, :, j * width : j * width + order] = powers[:m].transpose(2, 0, 1)
+        block[order:, :, j * width : (j + 1) * width] = samples
+        rows.append(block)
+    return np.concatenate(rows)
+
+
+def _interval_grams(F, g, t, W, holds, steps: "_Steps", beta: float) -> list[np.ndarray]:
+    """`_blocked_gram`'s sums for any sampling, one per distinct step (`_Steps`), from the
+    states at every sample (`_responses`)."""
+    order, count = F.shape[0], len(holds)
+    width = order + 2
+    rows = np.empty((count, width, t.size - 1))
+    rows[:, :order] = _responses(F, g, t, W, holds)[:, :-1].transpose(0, 2, 1)
+    rows[:, order] = W[:, :-1]
+    for j, hold in enumerate(holds):
+        rows[j, order + 1] = np.diff(W[j]) if hold == "linear" else 0.0
+    X = rows.reshape(count * width, -1)
+    if beta:
+        X = X * np.exp(-0.5 * beta * (t[-1] - t[:-1]))
+    if steps.index is None:
+        return [X @ X.T]
+    grams = np.zeros((steps.values.size, X.shape[0], X.shape[0]))
+    for lo in range(0, X.shape[1], 4096):
+        part = X[:, lo : lo + 4096].T
+        np.add.at(grams, steps.index[lo : lo + 4096], part[:, :, None] * part[:, None, :])
+    return list(grams)
+
+
+HALF_RATE = 0.5  # |G| sigma at most this in a Van Loan exponential: e^(-G sigma) stays near 1
+
+
+def _interval_integral(F, g, count: int, h: float, beta: float, Q: np.ndarray) -> np.ndarray:
+    """int_0^1 e^(G s) Q e^(G^T s) ds: the integral over one interval of h (time tau = h s)
+    of v v^T for every start vector of the Gram matrix Q, v = each signal's [z; level;
+    increment] with z' = h (F z + g level), level' = increment (G also shifted by beta h /
+    2, the weight). Van Loan's block exponential over a fraction 2^-k of the interval short
+    enough that e^(-G s) stays near 1 (over the whole one, for a filter fast against the
+    sampling, it grows as e^(h / T) and the difference that makes the integral loses every
+    digit), then k doublings M(2s) = M(s) + e^(G s) M(s) e^(G^T s), sums of positive
+    terms. Q is scaled to 1 in the exponential (its backward error is relative to the
+    whole block)."""
+    order = F.shape[0]
+    width = order + 2
+    d = count * width
+    one = np.zeros((width, width))
+    one[:order, :order], one[:order, order], one[order, order + 1] = h * F, h * g, 1.0
+    G = 0.5 * beta * h * np.eye(d)
+    for j in range(count):
+        G[j * width : (j + 1) * width, j * width : (j + 1) * width] += one
+    rate = np.abs(one[: order + 1, : order + 1]).sum(0).max() + 0.5 * beta * h
+    halvings = max(0, math.ceil(math.log2(rate / HALF_RATE))) if rate > HALF_RATE else 0
+    size = np.abs(Q).max()
+    if not size > 0:
+        return Q.copy()  # 0 (or not finite: said so by the caller)
+    s = 2.0**-halvings
+    block = np.zeros((2 * d, 2 * d))
+    block[:d, :d], block[:d, d:], block[d:, d:] = -s * G, (s / size) * Q, s * G.T
+    E = linalg.expm(block)
+    Phi = E[d:, d:].T  # e^(G s)
+    M = Phi @ E[:d, d:]
+    for _ in range(halvings):
+        M = M + Phi @ M @ Phi.T
+        Phi = Phi @ Phi
+    return size * 0.5 * (M + M.T)
 
 
 # What a fit is worth: the fitted output, residuals and the uncertainty of k --------------------
