@@ -203,3 +203,53 @@ def test_several_unknowns_step_on_by_a_chord(dc_motor, monkeypatch):
     plain = quiet(dc_motor, t, u, y, hold="zoh")
     assert len(counted) == 3
     np.testing.assert_allclose(result.k, plain.k, atol=0.01 * result.k_se.min())
+
+
+@pytest.mark.parametrize("condition", [10.0, 1e7, 1e10])
+def test_projection_factorises_as_its_gram_conditions_say(dc_drive, condition):
+    """`_Projection` factorises the nuisances' scaled Gram matrix by Cholesky below
+    GRAM_CONDITION (the condition then bounded by n |R^-1|_F^2, or at 1e7, past that bound's
+    reach, by the eigenvalues), else by QR: R^-1 is the one of that factorisation."""
+    rng = np.random.default_rng(4)
+    a, b, c, d = rng.standard_normal((4, 2000))
+    XT = np.array([a, a + 2.0 * c / np.sqrt(condition), b + 0.5 * a, 1e3 * d])
+    projection = dc_drive._Projection.of_rows(XT)
+    scale = np.sqrt(np.diag(XT @ XT.T))
+    gram = (XT @ XT.T) / np.outer(scale, scale)
+    values = np.linalg.eigvalsh(gram)  # (the scaled Gram's condition: about `condition`)
+    assert values[-1] / values[0] == pytest.approx(condition, rel=0.5)
+    if condition < 1e8:
+        R = np.linalg.cholesky(gram).T
+        bound = 4 * np.sum(np.linalg.inv(R) ** 2)  # (below the eigenvalues' reach at 10 only)
+        assert (bound < dc_drive.GRAM_CONDITION / dc_drive.CLEAR_CONDITION) == (condition < 1e3)
+    else:
+        R = np.linalg.qr(XT.T / scale, mode="r")
+    # (this Gram matrix's rounding, amplified by the condition; at 1e10 Cholesky's R^-1 is not
+    # QR's, whose rows differ in sign)
+    rtol = 1e-14 * condition + 1e-12 if condition < 1e8 else 1e-9
+    np.testing.assert_allclose(projection.inverse, np.linalg.inv(R) / scale[:, None], rtol=rtol)
+    # the residuals are orthogonal to the rows either way
+    W = rng.standard_normal((2, 2000))
+    rest = projection.fit_rows(W)[1]
+    assert np.abs(rest @ XT.T).max() < 1e-9 * np.abs(W @ XT.T).max()
+
+
+def test_schur_poles_are_the_eigenvalues(dc_drive):
+    """The poles `_predictor_stable` judges, from a real Schur form's 1 x 1 and 2 x 2 diagonal
+    blocks in Python's scalars, are np.linalg.eigvals' (real, complex pairs, repeated); a
+    matrix that is not quasi-triangular goes to eigvals itself."""
+    from scipy import linalg
+
+    rng = np.random.default_rng(6)
+    for size in range(1, 7):
+        for _ in range(20):
+            F = linalg.schur(rng.standard_normal((size, size)) * 3.0, output="real")[0]
+            blocks = dc_drive._diagonal_blocks(F)
+            poles = np.sort_complex(np.array(dc_drive._schur_poles(F, blocks)))
+            expected = np.sort_complex(np.linalg.eigvals(F))
+            np.testing.assert_allclose(poles, expected, rtol=1e-9, atol=1e-12)
+    full = rng.standard_normal((4, 4))
+    assert dc_drive._diagonal_blocks(full) is None
+    np.testing.assert_allclose(np.sort_complex(np.array(dc_drive._schur_poles(full, None))),
+                               np.sort_complex(np.linalg.eigvals(full)))  # fmt: skip
+    assert dc_drive._schur_poles(np.zeros((0, 0)), None) == []
