@@ -253,3 +253,20 @@ def test_schur_poles_are_the_eigenvalues(dc_drive):
     np.testing.assert_allclose(np.sort_complex(np.array(dc_drive._schur_poles(full, None))),
                                np.sort_complex(np.linalg.eigvals(full)))  # fmt: skip
     assert dc_drive._schur_poles(np.zeros((0, 0)), None) == []
+
+
+def test_the_summary_inverts_one_entry_as_lapack_does(absorber):
+    """`_eigenvalues_and_inverse` skips LAPACK for one entry (one unknown, white noise)
+    within its range: the entry and its reciprocal are what eigvalsh and pinv return, to the
+    bit (beyond it, LAPACK's own)."""
+    rng = np.random.default_rng(11)
+    for value in np.r_[np.exp(rng.uniform(-700, 700, 4000)), 1.0, 0.0, -1.0, 5e-324, 1.7e308]:
+        M = np.array([[value]])
+        with np.errstate(over="ignore"):  # (1 / 5e-324)
+            values, inverse = absorber._eigenvalues_and_inverse(M)
+            assert values.tolist() == np.linalg.eigvalsh(M).tolist()
+            assert inverse.tolist() == np.linalg.pinv(M).tolist()
+    M = np.array([[2.0, 1.0], [1.0, 3.0]])  # (larger: LAPACK's own)
+    values, inverse = absorber._eigenvalues_and_inverse(M)
+    assert values.tolist() == np.linalg.eigvalsh(M).tolist()
+    assert inverse.tolist() == np.linalg.pinv(M).tolist()
