@@ -1143,19 +1143,27 @@ def _K(k) -> np.ndarray:
     return np.prod(k ** _EXPONENTS, -1)
 
 
+def _denominator(Theta: np.ndarray, k) -> tuple[np.ndarray, np.ndarray]:
+    """A(s, k)'s coefficients, highest power first, from its leading non-zero one (its
+    degree), and those less the trailing zeros too (roots at 0, integrators): np.trim_zeros'
+    slices from one np.flatnonzero (trim_zeros costs 8 us a side)."""
+    a = (Theta @ _K(k))[n::-1]
+    nonzero = np.flatnonzero(a)
+    if not nonzero.size:
+        return a[:0], a[:0]
+    return a[nonzero[0] :], a[nonzero[0] : nonzero[-1] + 1]
+
+
 def _mode_rates(Theta: np.ndarray, k) -> np.ndarray:
     """|s| of A(s, k)'s roots but those at 0 (integrators): its modes' rates, the reciprocals
     of their time constants (an infinite one left to the callers to judge); none where A's
     coefficients are not finite."""
-    a = np.trim_zeros((Theta @ _K(k))[n::-1], "f")
-    if a.size < 2 or not np.isfinite(a).all():
+    a, low = _denominator(Theta, k)
+    if a.size < 2 or not np.isfinite(a).all() or low.size < 2:
         return np.zeros(0)
-    a = np.trim_zeros(a, "b")  # (the roots at 0, which np.roots would append)
-    if a.size < 2:
-        return np.zeros(0)
-    companion = np.diag(np.ones(a.size - 2), -1)  # np.roots' matrix, without its overheads
+    companion = np.diag(np.ones(low.size - 2), -1)  # np.roots' matrix, without its overheads
     with np.errstate(all="ignore"):
-        companion[0] = -a[1:] / a[0]
+        companion[0] = -low[1:] / low[0]
         rates = np.abs(np.linalg.eigvals(companion))
     return rates[rates > 0]
 
@@ -6380,9 +6388,8 @@ def _other_minima(Theta, records, settings, k, minima, rss, variance) -> list[st
 
 def _short_record(Theta, k, shapes) -> list[str]:
     """A record under half the fitted model's slowest time constant."""
-    a = np.trim_zeros((Theta @ _K(k))[n::-1], "f")
+    low = _denominator(Theta, k)[1]  # (the trailing zeros are roots at 0, integrators)
     span = max(shape.span for shape in shapes)
-    low = np.trim_zeros(a, "b")  # (the trailing zeros are roots at 0, integrators)
     with np.errstate(all="ignore"):  # Cauchy's bound on 1/|root|, above the slowest time
         bound = 1.0 + float(np.max(np.abs(low[:-1] / low[-1]))) if low.size > 1 else 0.0
     if span >= bound:  # (twice half of it: a margin for the roots' rounding) no root needed

@@ -227,3 +227,20 @@ def test_a_prior_that_outweighs_the_data_is_a_warning_and_prior_weight_sets_a_re
             assert dc_drive.estimate(t_, u_, y_, k0=5.0).k == pytest.approx(5.0, rel=1e-6)
     with pytest.raises(ValueError, match="no information about k at k0 = 5: no relative S0"):
         dc_drive.prior_weight(t, 0 * u, 0 * y, k0=5.0)
+
+
+def test_the_denominator_is_trim_zeros_slices(absorber):
+    """`_denominator` trims A(s, k)'s zeros as np.trim_zeros does (leading ones; then the
+    trailing ones too), NaN and infinite coefficients kept."""
+    rng = np.random.default_rng(8)
+    rows = absorber.n + 1
+    for trial in range(500):
+        Theta = rng.standard_normal((rows + absorber.m + 1, absorber.N + 1))
+        zeros = rng.choice(rows, int(rng.integers(0, rows + 1)), replace=False)
+        Theta[zeros] = 0.0
+        if trial % 7 == 0:
+            Theta[int(rng.integers(rows)), 0] = [math.nan, math.inf][trial % 2]
+        A = (Theta @ absorber._K(0.72))[absorber.n :: -1]
+        front, both = absorber._denominator(Theta, 0.72)
+        assert np.array_equal(front, np.trim_zeros(A, "f"), equal_nan=True)
+        assert np.array_equal(both, np.trim_zeros(A), equal_nan=True)
