@@ -5473,15 +5473,15 @@ def _distinct_steps(steps: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     A regular record's intervals differ only by the rounding of its times: their bit
     patterns, read as integers (ordered as the positive floats they hold), span fewer values
     than there are intervals, and counting each (np.bincount) finds the same values and
-    counts without np.unique's sort (20000 samples at dt = 0.01: 16384 patterns; 0.07 ms
-    instead of 0.23, of a 5.5 ms fit). Irregular ones (a wider span): np.unique.
+    counts without np.unique's sort (20000 samples at dt = 0.01: 16384 patterns; 0.05 ms
+    instead of 0.23, of a 5 ms fit). Irregular ones (a wider span): np.unique.
     """
     if steps.size:
         bits = steps.view(np.int64)
         low = int(bits.min())
         if int(bits.max()) - low < steps.size:
             counts = np.bincount(bits - low)
-            present = np.flatnonzero(counts)
+            present = np.flatnonzero(counts != 0)  # (on booleans: a fifth of the time)
             return (present + low).view(np.float64), counts[present]
     return np.unique(steps, return_counts=True)
 
