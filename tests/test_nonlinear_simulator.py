@@ -16,10 +16,11 @@ from nonlinear_models import PENDULUM_K, TWO_TANKS_K, pendulum, two_tanks, weir_
 from scipy.integrate import solve_ivp
 
 import mtt
-from mtt.derivation.nonlinear import NonlinearStateSpace
+from mtt.derivation.nonlinear import NonlinearStateSpace, nonlinear_state_space
 from mtt.estimator import nonlinear_codegen
 from mtt.language.diagnostics import ModelError
 
+DATA = Path(__file__).resolve().parent / "data" / "nonlinear"
 TANKS_VALUES = dict(zip(("c1", "c2", "kp"), TWO_TANKS_K, strict=True))
 
 
@@ -466,3 +467,26 @@ def test_tanks_at_rest_are_simulated_from_sample_to_sample(capsys):
     for row, k in zip(rows, ([2.0, 2.5], [1.5, 3.0]), strict=True):
         exact = hand(*k)
         assert np.max(np.abs(row - exact)) <= 1e-9 * np.max(exact)
+
+
+def test_a_model_without_unknowns_simulates_and_refuses_a_fit():
+    """tests/data/nonlinear/lever.bg declares no unknown: its module still simulates, with
+    sensitivities to the initial state alone (sympy's jacobian refuses an empty list of
+    unknowns, and the kernels once unpacked none into an empty target), and its fit says
+    there is nothing to fit."""
+    lever = nonlinear_codegen.load(nonlinear_state_space(DATA / "lever.bg"), values={})
+    assert lever.UNKNOWNS == () and lever.STATES == ("p_mass", "q_a")
+    t = np.linspace(0.0, 2.0, 81)
+    u = np.where(t < 1.0, 1.0, 0.5)
+
+    def rhs(time, x):  # p' = u / n, q' = p / 3 / n, n = 2 cos(q): the lever's ratio
+        ratio = 2.0 * math.cos(x[1])
+        return [(1.0 if time < 1.0 else 0.5) / ratio, x[0] / 3.0 / ratio]
+
+    states, _ = _reference(rhs, t, [0.0, 0.0])
+    run = lever.sensitivities(t, u, hold="zoh", rtol=1e-10, atol=1e-12)
+    assert np.max(np.abs(run.x - states)) < 1e-8 * np.max(np.abs(states))
+    assert np.allclose(lever.simulate(t, u, hold="zoh"), states[:, 0] / 3.0, rtol=1e-7, atol=1e-9)
+    assert run.dy_dk.shape == (t.size, 0) and run.dx_dx0.shape == (t.size, 2, 2)
+    with pytest.raises(ValueError, match="declares no unknown parameter: nothing to fit"):
+        lever.fit(t, u, run.y)

@@ -100,6 +100,12 @@ def _edges(f: list, states: list[sympy.Symbol], unknowns: list, kept: list) -> l
     return [(i, edge, slope) for (i, edge), slope in sorted(found.items(), key=str)]
 
 
+def _jacobian(matrix: sympy.Matrix, symbols: list) -> sympy.Matrix:
+    """matrix's Jacobian by symbols, (rows, 0) for none (a model without unknowns: sympy's
+    jacobian refuses an empty list)."""
+    return matrix.jacobian(symbols) if symbols else sympy.zeros(matrix.rows, 0)
+
+
 def _kernels(system: NonlinearStateSpace, kept: list[sympy.Symbol]) -> tuple[Frozen, list, list]:
     """The module's kernels. A kink (abs, min, max: f stays continuous) takes the branch
     the state is on, computed inside each kernel (its mode is side(s) there); a jump
@@ -117,13 +123,13 @@ def _kernels(system: NonlinearStateSpace, kept: list[sympy.Symbol]) -> tuple[Fro
     names |= {s: s.name for s in held}
     base = [*x, u, *k, *kept]
     arguments = base + held
-    f_x, f_k = f.jacobian(x), f.jacobian(k)
+    f_x, f_k = _jacobian(f, x), _jacobian(f, k)
     # (a branch switched off by a selector is kept inside its domain: no edge of the state's)
     edges = _edges([shielded(e, frozen.selectors) for e in f], x, k, kept)
     gm = sympy.Matrix([g])
     jumps = [switch.function for switch in frozen.switches if not switch.continuous]
     sm = sympy.Matrix(jumps) if jumps else sympy.zeros(0, 1)
-    first = [*f_x, *f.diff(u), *f_k, *gm.jacobian(x), g.diff(u), *gm.jacobian(k)]
+    first = [*f_x, *f.diff(u), *f_k, *_jacobian(gm, x), g.diff(u), *_jacobian(gm, k)]
     v = [sympy.Symbol(f"v{i}") for i in range(n)]
     du = sympy.Symbol("du")
 
@@ -175,7 +181,7 @@ def _kernels(system: NonlinearStateSpace, kept: list[sympy.Symbol]) -> tuple[Fro
         kernel(
             "switch_gradient",
             arguments,
-            [*sm.jacobian(x), *sm.diff(u), *sm.jacobian(k)] if jumps else [],
+            [*_jacobian(sm, x), *sm.diff(u), *_jacobian(sm, k)] if jumps else [],
             names,
             prelude,
         ),

@@ -82,6 +82,12 @@ def _combination(terms: list[tuple[float, str]], start: str | None = None) -> st
     return text or "0.0"
 
 
+def _unpack(names: list[str], value: str) -> list[str]:
+    """The line `a, b, ... = value` (a trailing comma: one name unpacks too), none for no
+    names (a model without unknowns has no sensitivities to them)."""
+    return [f"{''.join(f'{name}, ' for name in names)}= {value}"] if names else []
+
+
 @dataclass(frozen=True)
 class _Factored:
     """W = I/(h gamma) - f_x factorised in place as L U (unit lower L, multipliers in the
@@ -99,8 +105,8 @@ class _Factored:
         entries = [(i, j) for i in range(n) for j in range(n)]
         lines = [
             f"_d = jacobian({', '.join(state)})",
-            f"{''.join(f'j{i}_{j}, ' for i, j in entries)}= _d[:{n * n}]",
-            f"{''.join(f'fu{i}, ' for i in range(n))}= _d[{n * n}:{n * n + n}]",
+            *_unpack([f"j{i}_{j}" for i, j in entries], f"_d[:{n * n}]"),
+            *_unpack([f"fu{i}" for i in range(n)], f"_d[{n * n}:{n * n + n}]"),
             f"_g = 1.0 / ({gamma!r}*h)",
             "_hinv = 1.0 / h",
             "_hdu = h*du",
@@ -163,7 +169,7 @@ def step_kernel(n: int, zeros: set[tuple[int, int]], rest: list[str],
                 terms = [(a, f"K{j}_{i}") for j, a in enumerate(tableau.a[s])]
                 body.append(f"y{i} = {_combination(terms, x[i])}")
         time = "u" if tableau.alpha[s] == 0 else f"u + {tableau.alpha[s]!r}*_hdu"
-        body.append(f"{''.join(f'f{i}, ' for i in range(n))}= rhs({', '.join([*y, time, *rest])})")
+        body += _unpack([f"f{i}" for i in range(n)], f"rhs({', '.join([*y, time, *rest])})")
         for i in range(n):
             terms = []
             if tableau.c[s]:
@@ -201,10 +207,8 @@ def sensitivity_kernel(n: int, p: int, zeros: set[tuple[int, int]], rest: list[s
 
     def coupled(prefix: str, d: str) -> None:
         """prefix{i}_{a} = (d f_x S0)_{ia} + [a < p] (d f_k)_{ia} from a `second` result d."""
-        body.append(f"{''.join(f'{d}j{i}_{j}, ' for i, j in entries)}= {d}[:{n * n}]")
-        body.append(
-            f"{''.join(f'{d}k{i}_{a}, ' for i in range(n) for a in range(p))}= {d}[{n * n}:]"
-        )
+        body.extend(_unpack([f"{d}j{i}_{j}" for i, j in entries], f"{d}[:{n * n}]"))
+        body.extend(_unpack([f"{d}k{i}_{a}" for i in range(n) for a in range(p)], f"{d}[{n * n}:]"))
         for i in range(n):
             for a in range(columns):
                 terms = [(1.0, f"{d}j{i}_{j}*{S[j][a]}") for j in range(n) if (i, j) not in zeros]
@@ -228,11 +232,11 @@ def sensitivity_kernel(n: int, p: int, zeros: set[tuple[int, int]], rest: list[s
                     body.append(f"{ys[i][a]} = {_combination(terms, S[i][a])}")
         time = "u" if tableau.alpha[s] == 0 else f"u + {tableau.alpha[s]!r}*_hdu"
         stage = [*y, time, *rest]
-        body.append(f"{''.join(f'f{i}, ' for i in range(n))}= rhs({', '.join(stage)})")
+        body += _unpack([f"f{i}" for i in range(n)], f"rhs({', '.join(stage)})")
         body.append(f"_e = jacobian({', '.join(stage)})")
-        body.append(f"{''.join(f'e{i}_{j}, ' for i, j in entries)}= _e[:{n * n}]")
-        sensitivity = "".join(f"ek{i}_{a}, " for i in range(n) for a in range(p))
-        body.append(f"{sensitivity}= _e[{n * n + n}:{n * n + n + n * p}]")
+        body += _unpack([f"e{i}_{j}" for i, j in entries], f"_e[:{n * n}]")
+        sensitivity = [f"ek{i}_{a}" for i in range(n) for a in range(p)]
+        body += _unpack(sensitivity, f"_e[{n * n + n}:{n * n + n + n * p}]")
         for i in range(n):
             terms = []
             if tableau.c[s]:
