@@ -4880,44 +4880,6 @@ def _schur_poles(F: np.ndarray, blocks) -> list[complex]:
     return poles
 
 
-def _independence(eps: np.ndarray, u: np.ndarray) -> float:
-    """N r^T R^-1 r: r the cross-correlations of the prediction errors with the input at
-    lags 0..WHITENESS_LAGS - 1, R the input's autocorrelations (a Toeplitz matrix):
-    about chi-square with that many degrees of freedom when the errors are white and
-    independent of the input, whatever the input's colour (Soderstrom and Stoica, 1989);
-    large when the model does not explain how the output answers the input."""
-    lags = min(WHITENESS_LAGS, eps.size // 4)
-    if lags < 1:
-        return 0.0
-    v, inverse = _input_correlations(u, lags)
-    e = eps - eps.mean()
-    power = math.sqrt((e @ e) * (v @ v))
-    if power == 0:
-        return 0.0
-    r = _lagged_products(e, v, range(lags)) / power
-    return float(eps.size * r @ inverse @ r)
-
-
-_INPUTS: dict = {}  # id(u) -> (a copy of u, lags, v, R^+): the few inputs last asked about
-
-
-def _input_correlations(u: np.ndarray, lags: int) -> tuple[np.ndarray, np.ndarray]:
-    """(v, R^+): the input less its mean and the pseudo-inverse of its autocorrelations'
-    Toeplitz matrix (singular values below 1e-8 of the largest dropped), for `_independence`;
-    kept for the few inputs last asked about (a fit asks at every Gauss-Newton point), by
-    their values: an input changed in place is not mistaken for the one it was."""
-    found = _INPUTS.get(id(u))
-    if found is None or found[1] != lags or not np.array_equal(found[0], u):
-        v = u - u.mean()
-        power = v @ v
-        rho = _lagged_products(v, v, range(lags)) / power if power else np.zeros(lags)
-        inverse = np.linalg.pinv(linalg.toeplitz(rho), rcond=1e-8)
-        if len(_INPUTS) >= 8:
-            _INPUTS.pop(next(iter(_INPUTS), None), None)  # (another thread may have dropped it)
-        found = _INPUTS[id(u)] = (u.copy(), lags, v, inverse)
-    return found[2], found[3]
-
-
 # The exact fit's descent: Levenberg-Marquardt steps of the prediction error from a start --------
 
 # Gauss-Newton steps with the analytic Jacobian of `_prediction`, damped until the cost
@@ -5081,6 +5043,46 @@ def _gauss_newton(Theta, records, k, noise: NoiseModel, bounds, settings, sample
             if away < SAME_BASIN**2 and rss < cost + MARGIN * cost / samples:
                 return end, noise, cost, iterations
     return *unpack(point), rss, iterations
+
+
+# The independence figure: the prediction errors' cross-correlations with the input -------------
+
+def _independence(eps: np.ndarray, u: np.ndarray) -> float:
+    """N r^T R^-1 r: r the cross-correlations of the prediction errors with the input at
+    lags 0..WHITENESS_LAGS - 1, R the input's autocorrelations (a Toeplitz matrix):
+    about chi-square with that many degrees of freedom when the errors are white and
+    independent of the input, whatever the input's colour (Soderstrom and Stoica, 1989);
+    large when the model does not explain how the output answers the input."""
+    lags = min(WHITENESS_LAGS, eps.size // 4)
+    if lags < 1:
+        return 0.0
+    v, inverse = _input_correlations(u, lags)
+    e = eps - eps.mean()
+    power = math.sqrt((e @ e) * (v @ v))
+    if power == 0:
+        return 0.0
+    r = _lagged_products(e, v, range(lags)) / power
+    return float(eps.size * r @ inverse @ r)
+
+
+_INPUTS: dict = {}  # id(u) -> (a copy of u, lags, v, R^+): the few inputs last asked about
+
+
+def _input_correlations(u: np.ndarray, lags: int) -> tuple[np.ndarray, np.ndarray]:
+    """(v, R^+): the input less its mean and the pseudo-inverse of its autocorrelations'
+    Toeplitz matrix (singular values below 1e-8 of the largest dropped), for `_independence`;
+    kept for the few inputs last asked about (a fit asks at every Gauss-Newton point), by
+    their values: an input changed in place is not mistaken for the one it was."""
+    found = _INPUTS.get(id(u))
+    if found is None or found[1] != lags or not np.array_equal(found[0], u):
+        v = u - u.mean()
+        power = v @ v
+        rho = _lagged_products(v, v, range(lags)) / power if power else np.zeros(lags)
+        inverse = np.linalg.pinv(linalg.toeplitz(rho), rcond=1e-8)
+        if len(_INPUTS) >= 8:
+            _INPUTS.pop(next(iter(_INPUTS), None), None)  # (another thread may have dropped it)
+        found = _INPUTS[id(u)] = (u.copy(), lags, v, inverse)
+    return found[2], found[3]
 
 
 # The batch fit: whole records, exact for the hold, with the uncertainty of k ----------------------
