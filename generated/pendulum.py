@@ -6069,6 +6069,16 @@ def _absorbed_warning(share: float, name: str, nuisances: str, *, poor: bool,
     return text, poor or undetermined
 
 
+def _constant_output() -> str:
+    """The contradiction of a record whose output does not vary: the estimate answers
+    rounding error, and fit % (relative to the output's variation) is undefined."""
+    return (
+        "the output is constant: nothing in it responds to the input, so the estimate "
+        "means nothing and fit_percent (relative to the output's variation) is undefined "
+        "(NaN); check the output's column and the experiment"
+    )
+
+
 def _below_mean(fit_percent: float) -> str:
     """The contradiction of a fit below 0 %."""
     return (
@@ -6292,11 +6302,7 @@ def _verdict(Theta, records, shapes, k, summary: _Summary, *, found_, idle, nuis
             elif not clean:
                 found_.append(text)
     if not summary.deviations > 0:  # (k and k_se then answer rounding error alone)
-        contradictions.append(
-            "the output is constant: nothing in it responds to the input, so the estimate "
-            "means nothing and fit_percent (relative to the output's variation) is undefined "
-            "(NaN); check the output's column and the experiment"
-        )
+        contradictions.append(_constant_output())
     elif fit_percent < 0:
         contradictions.append(_below_mean(fit_percent))
     if dof < 10:

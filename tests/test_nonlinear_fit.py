@@ -258,3 +258,16 @@ def test_a_fit_that_reaches_no_minimum_says_so_not_that_the_model_cannot_be_simu
     assert not found.ok and np.isnan(found.k).all()
     assert found.message.startswith("no start reached a minimum of the criterion")
     assert "reaches no minimum within 100 simulations" in found.message
+
+
+def test_a_constant_output_is_refused_as_the_linear_fit_refuses_it(tanks):
+    """The pump varies, the level does not (a wrong column, a sensor off): the estimate
+    answers rounding error, so ok is False with the linear verdict's reason first, and
+    fit_percent is NaN."""
+    t = np.arange(241) * 0.5
+    u = 0.3 + 0.5 * (np.sin(t / 7) > 0)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", tanks.EstimationWarning)
+        result = tanks.fit(t, u, np.full(t.size, 2.0), hold="zoh", multistart=0)
+    assert not result.ok and math.isnan(result.fit_percent)
+    assert result.warnings[0].startswith("the output is constant: nothing in it responds")
