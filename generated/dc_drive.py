@@ -710,176 +710,6 @@ TIME_RESOLUTION = 8 * np.finfo(float).eps  # relative precision of a time stamp
 BLOCK = 1 << 15  # samples per chunk of work: bounds the memory of long records
 
 
-MAX_FILTER_NESTING = 50  # parentheses in C(s) text (each level a recursion of the reader)
-MAX_FILTER_DEGREE = 24  # beyond, the roots of (1 + sT)^q are lost in rounding (spread eps^(1/q))
-_FILTER_TOKEN = re.compile(r"\s*(?:([0-9]+\.?[0-9]*(?:[eE][-+]?[0-9]+)?|\.[0-9]+(?:[eE][-+]?[0-9]+)?)|(\*\*|[-+*/^()])|(s))")
-
-
-def _filter_text(text: str) -> np.ndarray:
-    """A polynomial in s written as text, e.g. "(1+s)^5" or "1 + 2*s + s^2": coefficients in
-    ascending powers. Numbers, s, + - * /, ^ or ** with a whole exponent, parentheses; a
-    number may multiply without * ("2s"). Read by a small parser, never evaluated as code."""
-    tokens, at = [], 0
-    while at < len(text):
-        if text[at:].strip() == "":
-            break
-        match = _FILTER_TOKEN.match(text, at)
-        if not match:
-            raise ValueError(
-                f"C(s) = {_short(text)}: cannot read {text[at:].strip()[:12]!r} at character {at + 1} "
-                "(write a polynomial in s with numbers, + - * /, ^ and parentheses)"
-            )
-        number, operator, variable = match.groups()
-        tokens.append(("number", float(number)) if number else (operator or variable, None))
-        at = match.end()
-    tokens.append(("end", None))
-    depth = level = 0
-    for kind, _ in tokens:  # each level of parentheses is a recursion of the reader below
-        level += (kind == "(") - (kind == ")")
-        depth = max(depth, level)
-    if depth > MAX_FILTER_NESTING:
-        raise ValueError(
-            f"C(s) = {_short(text)}: parentheses nested {depth} deep, more than {MAX_FILTER_NESTING}"
-        )
-    position = 0
-
-    def peek() -> str:
-        return tokens[position][0]
-
-    def take(kind: str | None = None):
-        nonlocal position
-        token = tokens[position]
-        if kind is not None and token[0] != kind:
-            found = "the end" if token[0] == "end" else repr(token[0] if token[1] is None else token[1])
-            raise ValueError(f"C(s) = {_short(text)}: expected {kind!r}, found {found}")
-        position += 1
-        return token
-
-    def checked(c: np.ndarray, *parts: np.ndarray) -> np.ndarray:
-        """c, the product of parts, unless its coefficients left the floating-point range."""
-        if not np.isfinite(c).all():
-            raise ValueError(f"C(s) = {_short(text)}: a coefficient overflows the floating-point range")
-        if c.size < sum(part.size - 1 for part in parts) + 1 or (c[-1] == 0 and parts[0][-1]):
-            raise ValueError(
-                f"C(s) = {_short(text)}: its leading coefficient underflows to 0 (the numbers are too "
-                "small or too large for floating point: change the time unit)"
-            )
-        return c
-
-    def expression() -> np.ndarray:
-        sign = -1.0 if peek() == "-" else 1.0
-        if peek() in "+-":
-            take()
-        c = sign * term()
-        while peek() in ("+", "-"):
-            sign = 1.0 if take()[0] == "+" else -1.0
-            c = P.polyadd(c, sign * term())
-        return c
-
-    def term() -> np.ndarray:
-        c = power()
-        while peek() in ("*", "/", "number", "s", "("):
-            operator = take()[0] if peek() in ("*", "/") else "*"
-            right = power()
-            if operator == "/":
-                if right.size > 1 or right[0] == 0:
-                    raise ValueError(f"C(s) = {_short(text)}: divide only by a non-zero number")
-                with np.errstate(over="ignore", under="ignore"):
-                    c = checked(c / right[0], c)
-            else:
-                with np.errstate(over="ignore", under="ignore", invalid="ignore"):
-                    c = checked(P.polymul(c, right), c, right)
-        return c
-
-    def power() -> np.ndarray:
-        base = atom()
-        if peek() in ("^", "**"):
-            take()
-            exponent = take("number")[1]
-            if not (math.isfinite(exponent) and exponent == int(exponent) <= MAX_FILTER_DEGREE):
-                raise ValueError(
-                    f"C(s) = {_short(text)}: the exponent {exponent:g} must be a whole number from 0 "
-                    f"to {MAX_FILTER_DEGREE}"
-                )
-            result = np.ones(1)
-            for _ in range(int(exponent)):
-                with np.errstate(over="ignore", under="ignore", invalid="ignore"):
-                    result = checked(P.polymul(result, base), result, base)
-            return result
-        return base
-
-    def atom() -> np.ndarray:
-        kind, value = take()
-        if kind == "number":
-            return np.array([value])
-        if kind == "s":
-            return np.array([0.0, 1.0])
-        if kind == "(":
-            c = expression()
-            take(")")
-            return c
-        if kind in ("+", "-"):
-            return (1.0 if kind == "+" else -1.0) * atom()
-        found = "the end" if kind == "end" else repr(kind)
-        raise ValueError(f"C(s) = {_short(text)}: expected a number, s or '(', found {found}")
-
-    c = expression()
-    if peek() != "end":
-        take("end")
-    return np.trim_zeros(c, "b") if c.any() else np.zeros(1)
-
-
-def filter_polynomial(C=None) -> np.ndarray:
-    """The state-variable filter C(s), coefficients highest power first, checked.
-
-    C is None for (1 + s)^(n+1), a positive number T for (1 + sT)^(n+1), the coefficients
-    of C(s) (highest power first), or C(s) as text: "(1+s)^5", "1 + 2*s + s^2". C(s) must
-    be stable, of degree above n and m (so that the filtered derivatives s^i y/C, i <= n,
-    and s^j u/C, j <= m, need no differentiation) and at most MAX_FILTER_DEGREE.
-    """
-    if isinstance(C, str) and C.strip() == "auto":
-        raise ValueError(
-            "C='auto' is chosen from the data by `fit` and `estimate`; give C(s) itself here "
-            "(a time constant T, coefficients, or text such as \"(1+s)^5\")"
-        )
-    if isinstance(C, str):
-        c = _filter_text(C)[::-1]
-        name = f"C(s) = {_short(C)}"
-    elif C is None or np.ndim(C) == 0:
-        T = 1.0 if C is None else _positive("the filter time constant T", C)
-        with np.errstate(over="ignore", under="ignore"):
-            c = np.array([math.comb(n + 1, i) for i in range(n + 2)]) * np.float64(T) ** np.arange(n + 1, -1, -1)
-        if not (np.isfinite(c).all() and (c > 0).all()):
-            raise ValueError(
-                f"the filter time constant T = {T:g} is out of range: T^{n + 1} "
-                f"{'overflows' if T > 1 else 'underflows to 0'} in floating point (measure "
-                "time in a unit where T is nearer 1)"
-            )
-        return c
-    else:
-        c = np.trim_zeros(_array("C", C), "f")
-        name = "C(s)"
-    if c.size - 1 <= max(n, m):
-        raise ValueError(
-            f"{name} has degree {c.size - 1}; it must exceed the degrees of A(s) and B(s) "
-            f"(n = {n}, m = {m}), e.g. (1 + s)^{n + 1}"
-        )
-    if c.size - 1 > MAX_FILTER_DEGREE:
-        raise ValueError(
-            f"{name} has degree {c.size - 1}, more than {MAX_FILTER_DEGREE}: a filter of degree "
-            f"n + 1 = {n + 1} is enough, e.g. (1 + s)^{n + 1}"
-        )
-    if not np.isfinite(c).all():
-        raise ValueError(f"{name}: every coefficient must be finite")
-    unstable = [root for root in np.roots(c) if root.real >= 0]
-    if unstable:
-        raise ValueError(
-            f"{name} is not stable: it has a root at s = {unstable[0]:.6g} "
-            "(every root must have a negative real part)"
-        )
-    return c
-
-
 def _realisation(c: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """A, B of the controllable canonical realisation of 1/C(s): state i is s^i w / C."""
     order = c.size - 1
@@ -1105,6 +935,178 @@ def _propagate(Phi, Gamma, ends, z0, index=None, out=None) -> np.ndarray:
         drive = ends[:, i, None] if Gamma is None else ends[:, i, None] @ Gamma[k]
         out[:, i + 1] = (out[:, i, None] @ transposed[k] + drive)[:, 0]
     return out
+
+
+# The state-variable filter C(s): read from numbers or text, and checked ------------------------
+
+MAX_FILTER_NESTING = 50  # parentheses in C(s) text (each level a recursion of the reader)
+MAX_FILTER_DEGREE = 24  # beyond, the roots of (1 + sT)^q are lost in rounding (spread eps^(1/q))
+_FILTER_TOKEN = re.compile(r"\s*(?:([0-9]+\.?[0-9]*(?:[eE][-+]?[0-9]+)?|\.[0-9]+(?:[eE][-+]?[0-9]+)?)|(\*\*|[-+*/^()])|(s))")
+
+
+def _filter_text(text: str) -> np.ndarray:
+    """A polynomial in s written as text, e.g. "(1+s)^5" or "1 + 2*s + s^2": coefficients in
+    ascending powers. Numbers, s, + - * /, ^ or ** with a whole exponent, parentheses; a
+    number may multiply without * ("2s"). Read by a small parser, never evaluated as code."""
+    tokens, at = [], 0
+    while at < len(text):
+        if text[at:].strip() == "":
+            break
+        match = _FILTER_TOKEN.match(text, at)
+        if not match:
+            raise ValueError(
+                f"C(s) = {_short(text)}: cannot read {text[at:].strip()[:12]!r} at character {at + 1} "
+                "(write a polynomial in s with numbers, + - * /, ^ and parentheses)"
+            )
+        number, operator, variable = match.groups()
+        tokens.append(("number", float(number)) if number else (operator or variable, None))
+        at = match.end()
+    tokens.append(("end", None))
+    depth = level = 0
+    for kind, _ in tokens:  # each level of parentheses is a recursion of the reader below
+        level += (kind == "(") - (kind == ")")
+        depth = max(depth, level)
+    if depth > MAX_FILTER_NESTING:
+        raise ValueError(
+            f"C(s) = {_short(text)}: parentheses nested {depth} deep, more than {MAX_FILTER_NESTING}"
+        )
+    position = 0
+
+    def peek() -> str:
+        return tokens[position][0]
+
+    def take(kind: str | None = None):
+        nonlocal position
+        token = tokens[position]
+        if kind is not None and token[0] != kind:
+            found = "the end" if token[0] == "end" else repr(token[0] if token[1] is None else token[1])
+            raise ValueError(f"C(s) = {_short(text)}: expected {kind!r}, found {found}")
+        position += 1
+        return token
+
+    def checked(c: np.ndarray, *parts: np.ndarray) -> np.ndarray:
+        """c, the product of parts, unless its coefficients left the floating-point range."""
+        if not np.isfinite(c).all():
+            raise ValueError(f"C(s) = {_short(text)}: a coefficient overflows the floating-point range")
+        if c.size < sum(part.size - 1 for part in parts) + 1 or (c[-1] == 0 and parts[0][-1]):
+            raise ValueError(
+                f"C(s) = {_short(text)}: its leading coefficient underflows to 0 (the numbers are too "
+                "small or too large for floating point: change the time unit)"
+            )
+        return c
+
+    def expression() -> np.ndarray:
+        sign = -1.0 if peek() == "-" else 1.0
+        if peek() in "+-":
+            take()
+        c = sign * term()
+        while peek() in ("+", "-"):
+            sign = 1.0 if take()[0] == "+" else -1.0
+            c = P.polyadd(c, sign * term())
+        return c
+
+    def term() -> np.ndarray:
+        c = power()
+        while peek() in ("*", "/", "number", "s", "("):
+            operator = take()[0] if peek() in ("*", "/") else "*"
+            right = power()
+            if operator == "/":
+                if right.size > 1 or right[0] == 0:
+                    raise ValueError(f"C(s) = {_short(text)}: divide only by a non-zero number")
+                with np.errstate(over="ignore", under="ignore"):
+                    c = checked(c / right[0], c)
+            else:
+                with np.errstate(over="ignore", under="ignore", invalid="ignore"):
+                    c = checked(P.polymul(c, right), c, right)
+        return c
+
+    def power() -> np.ndarray:
+        base = atom()
+        if peek() in ("^", "**"):
+            take()
+            exponent = take("number")[1]
+            if not (math.isfinite(exponent) and exponent == int(exponent) <= MAX_FILTER_DEGREE):
+                raise ValueError(
+                    f"C(s) = {_short(text)}: the exponent {exponent:g} must be a whole number from 0 "
+                    f"to {MAX_FILTER_DEGREE}"
+                )
+            result = np.ones(1)
+            for _ in range(int(exponent)):
+                with np.errstate(over="ignore", under="ignore", invalid="ignore"):
+                    result = checked(P.polymul(result, base), result, base)
+            return result
+        return base
+
+    def atom() -> np.ndarray:
+        kind, value = take()
+        if kind == "number":
+            return np.array([value])
+        if kind == "s":
+            return np.array([0.0, 1.0])
+        if kind == "(":
+            c = expression()
+            take(")")
+            return c
+        if kind in ("+", "-"):
+            return (1.0 if kind == "+" else -1.0) * atom()
+        found = "the end" if kind == "end" else repr(kind)
+        raise ValueError(f"C(s) = {_short(text)}: expected a number, s or '(', found {found}")
+
+    c = expression()
+    if peek() != "end":
+        take("end")
+    return np.trim_zeros(c, "b") if c.any() else np.zeros(1)
+
+
+def filter_polynomial(C=None) -> np.ndarray:
+    """The state-variable filter C(s), coefficients highest power first, checked.
+
+    C is None for (1 + s)^(n+1), a positive number T for (1 + sT)^(n+1), the coefficients
+    of C(s) (highest power first), or C(s) as text: "(1+s)^5", "1 + 2*s + s^2". C(s) must
+    be stable, of degree above n and m (so that the filtered derivatives s^i y/C, i <= n,
+    and s^j u/C, j <= m, need no differentiation) and at most MAX_FILTER_DEGREE.
+    """
+    if isinstance(C, str) and C.strip() == "auto":
+        raise ValueError(
+            "C='auto' is chosen from the data by `fit` and `estimate`; give C(s) itself here "
+            "(a time constant T, coefficients, or text such as \"(1+s)^5\")"
+        )
+    if isinstance(C, str):
+        c = _filter_text(C)[::-1]
+        name = f"C(s) = {_short(C)}"
+    elif C is None or np.ndim(C) == 0:
+        T = 1.0 if C is None else _positive("the filter time constant T", C)
+        with np.errstate(over="ignore", under="ignore"):
+            c = np.array([math.comb(n + 1, i) for i in range(n + 2)]) * np.float64(T) ** np.arange(n + 1, -1, -1)
+        if not (np.isfinite(c).all() and (c > 0).all()):
+            raise ValueError(
+                f"the filter time constant T = {T:g} is out of range: T^{n + 1} "
+                f"{'overflows' if T > 1 else 'underflows to 0'} in floating point (measure "
+                "time in a unit where T is nearer 1)"
+            )
+        return c
+    else:
+        c = np.trim_zeros(_array("C", C), "f")
+        name = "C(s)"
+    if c.size - 1 <= max(n, m):
+        raise ValueError(
+            f"{name} has degree {c.size - 1}; it must exceed the degrees of A(s) and B(s) "
+            f"(n = {n}, m = {m}), e.g. (1 + s)^{n + 1}"
+        )
+    if c.size - 1 > MAX_FILTER_DEGREE:
+        raise ValueError(
+            f"{name} has degree {c.size - 1}, more than {MAX_FILTER_DEGREE}: a filter of degree "
+            f"n + 1 = {n + 1} is enough, e.g. (1 + s)^{n + 1}"
+        )
+    if not np.isfinite(c).all():
+        raise ValueError(f"{name}: every coefficient must be finite")
+    unstable = [root for root in np.roots(c) if root.real >= 0]
+    if unstable:
+        raise ValueError(
+            f"{name} is not stable: it has a root at s = {unstable[0]:.6g} "
+            "(every root must have a negative real part)"
+        )
+    return c
 
 
 # The cost: J(k, t) as a polynomial in k, built from the moments layer and Theta -------------
@@ -2276,6 +2278,8 @@ def _interval_costs(V: np.ndarray, W: np.ndarray, index) -> np.ndarray:
     q[:, -1] = np.maximum(q[:, -1], 0.0)
     return q
 
+
+# The engine's run: the estimate followed sample by sample, chunk by chunk ----------------------
 
 class _Run:
     """What the estimator carries from one sample to the next.
