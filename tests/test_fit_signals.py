@@ -308,3 +308,30 @@ def test_the_tracker_of_two_inputs_with_one_at_rest_is_the_single_channels():
     k = both.Tracker(k0=5.0, hold="zoh").update(t, U, speed)
     single = alone.Tracker(k0=5.0, hold="zoh").update(t, U[:, 0], speed)
     assert k == pytest.approx(single, rel=1e-10)
+
+
+def test_compare_estimates_each_outputs_initial_state():
+    """On a noise-free record whose outputs start away from rest, each with its own free
+    response (scipy's tf2ss of 1/A(s) made monic, A = 110 s^2 + 1101 s + 110 at jl = 10,
+    hand-derived above), compare finds those initial states and offsets, and fits exactly."""
+    t = np.arange(0.0, 20.0, 0.02)
+    U = np.repeat(np.random.default_rng(5).choice([-1.0, 1.0], size=(21, 2)), 50, 0)[: t.size]
+    G = motor().to_scipy(10.0)
+    forced = signal.lsim((G.A, G.B, G.C, G.D), U, t, interp=False)[1]
+    free = signal.StateSpace(*signal.tf2ss([110.0], [110.0, 1101.0, 110.0]))
+    starts = np.array([[0.3, -2.0], [-0.5, 1.5]])
+    Y = (
+        forced
+        + [0.5, -0.2]
+        + np.column_stack([signal.lsim(free, np.zeros(t.size), t, X0=x0)[1] for x0 in starts])
+    )
+    found = motor().fit(t, U, forced, hold="zoh", noise="white", offset=False,
+                        initial_state=False)  # fmt: skip
+    assert abs(found.k - 10.0) < 1e-7
+    compared = found.compare(t, U, Y)
+    assert np.allclose(compared.initial_state, starts, atol=1e-5)
+    assert np.allclose(compared.offset, [0.5, -0.2], atol=1e-6)
+    assert np.all(compared.fit_percent > 99.99)
+    module = motor().estimator()
+    record = module.signals_comparison_record(compared)
+    assert np.allclose(record["signals"]["Df:current"]["initial_state"], starts[1], atol=1e-5)
