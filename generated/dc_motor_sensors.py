@@ -6524,7 +6524,8 @@ def _exact_fit(Theta, records, shapes, k_ls, coefficients, total, found, *, c, k
                 "richer input"
             )
     chosen = WHITE
-    if noise != "white" and rss > CLEAN**2 * deviations:  # (noise-free data: no noise model)
+    if noise != "white" and deviations > 0 and rss > CLEAN**2 * deviations:  # (noise-free
+        # data, or a constant output, whose residuals are the model's misfit: no noise model)
         chosen = _choose_noise(Theta, records, k, noise, settings, count)
         if chosen.orders != (0, 0):
             k, chosen, rss, more = _gauss_newton(Theta, records, k, chosen, bounds, settings, count, keep)

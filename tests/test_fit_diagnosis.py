@@ -215,6 +215,8 @@ def test_a_constant_output_is_a_warning_not_a_silent_nan(dc_drive):
         fitted, texts = said(dc_drive, dc_drive.fit, t, u, np.ones_like(t), hold="zoh",
                              method=method)  # fmt: skip
         assert np.isnan(fitted.fit_percent) and not fitted.ok
+        # no noise in a constant output: its residuals are the misfit (was AR(2))
+        assert method != "pem" or fitted.noise.kind == "white"
         assert any(
             text.startswith("the output is constant: nothing in it responds") for text in texts
         )
