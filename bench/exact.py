@@ -13,7 +13,9 @@ hold and nothing else (noise "auto", offset and initial state estimated). "k_se 
 the mean standard error over the spread of the estimates; "covers" the share of 95 %
 intervals that hold the truth. Times: this process's CPU time, BLAS on one thread; the
 speed rows interleave `fit` and the peer (bench/output_error_peer.py, started at the
-model file's values, the reference of issue 18) and give the ratio of their medians.
+model file's values, the reference of issue 18) and give the ratio of their medians; the
+"first" rows time each record's first fit and the peer in fresh interpreters (the code
+warmed on another record), which the tables a fit keeps for the next one do not help.
 
     .venv/bin/python bench/exact.py --seeds 60           # every table (about 15 minutes)
     .venv/bin/python bench/exact.py --seeds 8 --only short,coloured
@@ -158,28 +160,45 @@ def coloured_rows(seeds: int) -> list[list[str]]:
     return calibration_rows("record", cases, seeds)
 
 
+SPEED_CASES = [  # (label, model, transfer function, truth, dt, PRBS period, known values)
+    ("DC drive, PRBS 1 s, dt 0.02", "dc_drive", dc_drive_tf, 10.0, 0.02, 1.0, {}),
+    (
+        "absorber, PRBS 2 s, dt 0.01",
+        "absorber",
+        absorber_tf,
+        0.72,
+        0.01,
+        2.0,
+        {"tau": 2.0, "l": 0.5},
+    ),
+    ("dc_motor, PRBS 0.5 s, dt 0.01", "dc_motor", dc_motor_tf, (1.0, 10.0), 0.01, 0.5, {}),
+]
+
+
+def speed_calls(module, tf, truth, dt, period, known, seed: int = 1, samples: int = 20001):
+    """{"fit": ..., "peer": ...}: (function, args, options) of the default fit and the peer on
+    a PRBS record of the case at 20 dB (white noise)."""
+    t = dt * np.arange(samples)
+    u = prbs(t, period, seed)
+    y = noisy(simulate(tf, truth, t, u, "zoh"), 20.0, "white", seed)
+    k0 = module.TRUE_VALUE
+    box = None if np.ndim(k0) == 0 else [(v / module.DEFAULT_RANGE, v * module.DEFAULT_RANGE)
+                                         for v in k0]  # fmt: skip
+    return {
+        "fit": (module.fit, (t, u, y), dict(hold="zoh", **known)),
+        "peer": (peer.fit, (module, t, u, y), dict(k0=k0, bounds=box, hold="zoh", **known)),
+    }
+
+
 def speed_rows(repeats: int) -> list[list[str]]:
     """The default fit against the peer on 2e4-sample records at 20 dB (white noise)."""
     rows = [["record (2e4 samples, 20 dB)", "fit (defaults)", "output-error peer", "peer / fit",
              "k: fit", "k: peer"]]  # fmt: skip
-    absorber = {"tau": 2.0, "l": 0.5}
-    cases = [("DC drive, PRBS 1 s, dt 0.02", "dc_drive", dc_drive_tf, 10.0, 0.02, 1.0, {}),
-             ("absorber, PRBS 2 s, dt 0.01", "absorber", absorber_tf, 0.72, 0.01, 2.0, absorber),
-             ("dc_motor, PRBS 0.5 s, dt 0.01", "dc_motor", dc_motor_tf, (1.0, 10.0), 0.01, 0.5,
-              {})]  # fmt: skip
-    for label, name, tf, truth, dt, period, known in cases:
+    for label, name, tf, truth, dt, period, known in SPEED_CASES:
         module = generated(name)
-        t = dt * np.arange(20001)
-        u = prbs(t, period, 1)
-        y = noisy(simulate(tf, truth, t, u, "zoh"), 20.0, "white", 1)
-        peer.check(module, t[:2001], u[:2001], truth, hold="zoh", **known)
-        k0 = module.TRUE_VALUE
-        box = None if np.ndim(k0) == 0 else [(v / module.DEFAULT_RANGE, v * module.DEFAULT_RANGE)
-                                             for v in k0]  # fmt: skip
-        calls = {
-            "fit": (module.fit, (t, u, y), dict(hold="zoh", **known)),
-            "peer": (peer.fit, (module, t, u, y), dict(k0=k0, bounds=box, hold="zoh", **known)),
-        }
+        t = dt * np.arange(2001)
+        peer.check(module, t, prbs(t, period, 1), truth, hold="zoh", **known)
+        calls = speed_calls(module, tf, truth, dt, period, known)
         spent, out = {key: [] for key in calls}, {}
         for _ in range(repeats):
             for key, (call, args, options) in calls.items():
@@ -190,6 +209,47 @@ def speed_rows(repeats: int) -> list[list[str]]:
         shown = [np.array2string(np.atleast_1d(out[key].k), precision=6) for key in calls]
         rows.append([label, f"{1e3 * fit_:.1f} ms", f"{1e3 * peer_:.1f} ms",
                      f"{peer_ / fit_:.2f}", *shown])  # fmt: skip
+    return rows
+
+
+FIRST = """
+import os, sys, time, warnings
+os.environ["OPENBLAS_NUM_THREADS"] = "1"
+sys.path[:0] = [{bench!r}]
+from _generated import generated
+from exact import SPEED_CASES, speed_calls
+warnings.simplefilter("ignore")
+for label, name, tf, truth, dt, period, known in SPEED_CASES:
+    module = generated(name)
+    other = speed_calls(module, tf, truth, 1.25 * dt, period, known, 2)
+    for call, args, options in other.values():  # (the code warmed on another record: another
+        call(*args, **options)  # sampling interval, so another filter, and another input)
+    spent = []
+    for call, args, options in speed_calls(module, tf, truth, dt, period, known).values():
+        start = time.process_time()
+        call(*args, **options)
+        spent.append(time.process_time() - start)
+    print(*spent)
+"""
+
+
+def first_rows(repeats: int) -> list[list[str]]:
+    """The speed rows' fit and peer, each the first of its record in a fresh interpreter
+    (the code warmed on another record, of another sampling interval and input): what the
+    tables a fit keeps for the next of the same filter, sampling and input (the moments'
+    filter, the input's autocorrelations) do not save. Medians over `repeats` processes."""
+    bench = os.path.dirname(os.path.abspath(__file__))
+    code = FIRST.format(bench=bench)
+    runs = []
+    for _ in range(repeats):
+        out = subprocess.run(
+            [sys.executable, "-c", code], capture_output=True, text=True, check=True
+        )
+        runs.append([[float(x) for x in line.split()] for line in out.stdout.splitlines()])
+    times = np.median(np.array(runs), axis=0)  # (cases, [fit, peer])
+    rows = [["record (2e4 samples, 20 dB)", "first fit", "output-error peer", "peer / fit"]]
+    for (label, *_), (fit_, peer_) in zip(SPEED_CASES, times, strict=True):
+        rows.append([label, f"{1e3 * fit_:.1f} ms", f"{1e3 * peer_:.1f} ms", f"{peer_ / fit_:.2f}"])
     return rows
 
 
@@ -300,6 +360,10 @@ TABLES = {
     "coloured": ("Coloured noise at 10 dB", coloured_rows),
     "honest": ("Honest ok: how often fit says ok, and its intervals", honest_rows),
     "speed": ("Speed against the output-error peer", lambda seeds: speed_rows(7)),
+    "first": (
+        "Speed of a record's first fit (a fresh interpreter each)",
+        lambda seeds: first_rows(7),
+    ),
     "throughput": ("Throughput and memory", lambda seeds: throughput_rows()),
 }
 
@@ -312,8 +376,8 @@ def main() -> None:
     warnings.simplefilter("ignore")
     for name in args.only.split(","):
         title, rows = TABLES[name]
-        print(f"\n{title} ({args.seeds} seeds a row):\n" if name not in ("speed", "throughput")
-              else f"\n{title}:\n")  # fmt: skip
+        seeded = name not in ("speed", "first", "throughput")
+        print(f"\n{title} ({args.seeds} seeds a row):\n" if seeded else f"\n{title}:\n")
         print(table(rows(args.seeds)))
         sys.stdout.flush()
 
