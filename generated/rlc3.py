@@ -3139,13 +3139,13 @@ def _record_moments(Theta, t, u, y, *, k, c, hold, offset, initial_state, beta, 
     M = _filtered_moments(c, t, W, holds, needs, beta, steps)
     if not np.isfinite(M).all():
         raise ValueError(_overflow(t, c))
-    if last >= first > 0:  # drop s^i 1/F for i < first (no offset), then project the rest out
+    if last >= first > 0:  # (no offset) drop s^i 1/F for i < first: not nuisances here
         start = M.shape[0] - last - 1  # where the unit step's derivatives begin
         keep = np.r_[np.arange(start), start + np.arange(first, last + 1)]
         M = M[np.ix_(keep, keep)]
     p = n + m + 2
     nuisances = max(last - first + 1, 0)
-    M = _project_out(M, M.shape[0] - nuisances)
+    M = _project_out(M, M.shape[0] - nuisances)  # every record: the nuisances' rows out
     if k is None:
         return Moments(M, None, None, None, t.size, nuisances)
     Z = np.r_[p + np.arange(n + 1), n + 1 + np.arange(m + 1)]
