@@ -4743,9 +4743,9 @@ def _prediction(Theta, record, k, noise: NoiseModel, settings, jacobian: bool, k
     unknown, the Jacobian by k is carried from `basis` (a `_Basis`: the record's outputs at
     a point near k) by `_updated_slopes` where that is accurate, else computed in full,
     which gives the new basis; several unknowns: a full evaluation gives the new basis, a
-    `_Chord`. The basis is returned as it is when not replaced. With `keep` (the residuals kept) the whiteness and independence
-    figures are left to `_Prediction.with_figures`: a fit needs them at its estimate alone.
-    steps: the record's `_Steps` (None: found here)."""
+    `_Chord`. The basis is returned as it is when not replaced. With `keep` (the residuals
+    kept) the whiteness and independence figures are left to `_Prediction.with_figures`: a
+    fit needs them at its estimate alone. steps: the record's `_Steps` (None: found here)."""
     t, u, y = record
     offset, initial_state, hold = settings["offset"], settings["initial_state"], settings["hold"]
     real = _realise(Theta, k)
